@@ -279,7 +279,8 @@ size_t rm_junction_collapse(rm_pass *p, bool *ok);
 /* The sheets that ∇f's unit normals at some vertices fall into, each group's first normal
  * and its tangent plane's offset (n · x at that vertex): a normal more than the crease angle
  * (ISM_RM_CREASE_DEG) from every group's starts a new one. Two on a crease, three or more at
- * a junction. rm_junction.c's clusters and crease_merge_find's junction vertices read it. */
+ * a junction. rm_junction.c's clusters read it, and rm_junction_vertex for the crease merges
+ * (crease_merge_find, rm_collapse.c; snap_merge, rm_crease_slide.c). rm_sheets.c. */
 typedef struct rm_sheets {
     const double *normal[ISM_RM_COLLAPSE_MAX_DEGREE];
     double d[ISM_RM_COLLAPSE_MAX_DEGREE];
