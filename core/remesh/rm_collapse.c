@@ -67,7 +67,7 @@ bool rm_crease_bend_ok(const rm_pass *p, uint32_t t, uint32_t a, uint32_t b, con
     double now = rm_cos_bend(n, ln, u, lu), before = rm_cos_bend(m, lo, u, lu);
     /* a crease's edge bends as it did, give or take the hair moved */
     before = cos(fmin(M_PI, acos(fmax(-1, fmin(1, before))) + ISM_RM_CROWD_BEND_DEG * M_PI / 180));
-    if (now >= fmin(before, cos(ISM_RM_CREASE_DEG * M_PI / 180)))
+    if (now >= fmin(before, rm_crease_cos()))
         return true;
     double ab = rm_dist(rm_pos(p, a), rm_pos(p, b));
     return curvature && ab > 0 &&

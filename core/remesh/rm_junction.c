@@ -295,7 +295,7 @@ static bool spokes_ok(rm_pass *p, const junction *j, uint32_t w, const double n[
             continue;
         double c = rm_cos_bend(n[i], ln[i], n[k], ln[k]);
         double wb = rm_dist(x, rm_pos(p, b));
-        if (!(c >= cos(ISM_RM_CREASE_DEG * M_PI / 180)) &&
+        if (!(c >= rm_crease_cos()) &&
             !(wb > 0 && rm_bend_is_curvature(p, w, b, acos(fmax(-1, fmin(1, c))),
                                              (ln[i] + ln[k]) / wb, NULL)))
             return false;

@@ -53,7 +53,7 @@ static bool is_crease(const rm_pass *p, uint32_t a, uint32_t b, uint32_t t1, uin
     double l1 = rm_cross(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2], n1);
     double l2 = rm_cross(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2], n2);
     double cosine = ism_dot3(n1, n2) / (l1 * l2);
-    if (!(cosine < cos(ISM_RM_CREASE_DEG * M_PI / 180)) ||
+    if (!(cosine < rm_crease_cos()) ||
         rm_is_cap(P + 3 * u[0], P + 3 * u[1], P + 3 * u[2]) ||
         rm_is_cap(P + 3 * w[0], P + 3 * w[1], P + 3 * w[2]))
         return false; /* a cap's normal says nothing of a bend */

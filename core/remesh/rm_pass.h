@@ -29,6 +29,13 @@
  * meets at tens of degrees. Neither flipped across nor moved
  * along (rm_locks.c), but for a crease vertex sliding along its crease (rm_crease_slide.c). */
 #define ISM_RM_CREASE_DEG 40.0
+/* Its cosine, the one number every crease test compares a dot product of unit normals with
+ * (rm_sheets.c's grouping and the screen before it agree through it; GCC folds it to a
+ * constant, revE 5). */
+static inline double rm_crease_cos(void)
+{
+    return cos(ISM_RM_CREASE_DEG * M_PI / 180);
+}
 /* Triangles whose smallest angle is under this (degrees) have their edges tried by the
  * collapses (rm_collapse.c): the issue's goal on smooth surfaces; better triangles are left to
  * flips and relaxation. */

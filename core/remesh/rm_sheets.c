@@ -30,7 +30,7 @@ void rm_sheets_add(const rm_pass *p, rm_sheets *s, uint32_t v)
     if (rm_normal_zero(p, v))
         return;
     const double *n = p->normal + 3 * (size_t)v;
-    double near = cos(ISM_RM_CREASE_DEG * M_PI / 180);
+    double near = rm_crease_cos();
     int h = 0;
     while (h < s->n && !(ism_dot3(s->normal[h], n) >= near))
         h++;
@@ -85,7 +85,7 @@ static bool third_sheet_possible(const rm_pass *p, uint32_t v, const uint32_t *n
     if (rm_normal_zero(p, v))
         return true;
     const double *nv = p->normal + 3 * (size_t)v, *first = NULL;
-    double crease = cos(ISM_RM_CREASE_DEG * M_PI / 180);
+    double crease = rm_crease_cos();
     double half = cos(0.49 * ISM_RM_CREASE_DEG * M_PI / 180); /* under half: past rounding */
     for (int i = 0; i < n; i++)
         for (uint32_t s = 0; s < r->count[nb[i]]; s++) {
