@@ -311,7 +311,10 @@ bool rm_sheets_meet(const rm_sheets *s, double x[3]);
  * rm_crease_slide.c's merges onto a crease do not move it as the vertex that stays; it may
  * still go as the vertex merged there (kept from that too, three-balls' 1e-4 box kept a
  * 9.18° needle beside it that rm_junction.c's collapse into it could not mend; that box lost
- * it before as well), and rm_junction.c's clusters may collapse into it. */
+ * it before as well), and rm_junction.c's clusters may collapse into it. False, without
+ * looking, for v of more than ISM_RM_MERGE_MAX_DEGREE triangles (rm_merge.h): such a vertex
+ * is not recognised as a junction's (crease_merge_find does not merge a vertex of that degree
+ * anyway; snap_merge may then move it as the vertex that stays). */
 bool rm_junction_vertex(const rm_pass *p, uint32_t v);
 /* Splits needles under 10° that the collapses left (their short edge joins two locked
  * vertices, or its collapse was refused) at a new vertex beside that edge (rm_insert.c),

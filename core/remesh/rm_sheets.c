@@ -21,8 +21,13 @@
  * line (a cube's corner: 1, three balls' triple points: 0.99). */
 #define ISM_RM_JUNCTION_DET 0.41
 /* A junction vertex's sheets are read off the vertices at most two edges from it, at most
- * this many (rm_junction_vertex): 8 + 8 x 8 = 72 for crease vertices of degree up to 8, with
- * room; where there are more the farthest are left out. */
+ * this many (rm_junction_vertex): 8 + 8 x 8 = 72 for crease vertices of degree up to 8 (a
+ * crowded crease vertex has 6 to 8), with room; where there are more the farthest are left
+ * out. The walk itself is not capped: v of up to ISM_RM_MERGE_MAX_DEGREE (24) triangles has
+ * up to 48 neighbours, each of whose triangles' corners is offered to the ring (an O(96)
+ * check and insertion), some 48 x 24 x 3 x 96 = 330k compares at worst; only a vertex the
+ * screen (third_sheet_possible) passes gets there, and crowded crease vertices have degree
+ * 6 to 8 (rm_junction.c's ISM_RM_JUNCTION_STAR), a few thousand compares (revE 4). */
 #define ISM_RM_JUNCTION_RING 96
 
 void rm_sheets_add(const rm_pass *p, rm_sheets *s, uint32_t v)
