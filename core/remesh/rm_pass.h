@@ -316,6 +316,9 @@ bool rm_sheets_meet(const rm_sheets *s, double x[3]);
  * is not recognised as a junction's (crease_merge_find does not merge a vertex of that degree
  * anyway; snap_merge may then move it as the vertex that stays). */
 bool rm_junction_vertex(const rm_pass *p, uint32_t v);
+/* rm_junction_vertex without its screen (third_sheet_possible, which only says no where the
+ * grouping would): the tests' check that the screen changes no answer. */
+bool rm_junction_vertex_unscreened(const rm_pass *p, uint32_t v);
 /* Splits needles under 10° that the collapses left (their short edge joins two locked
  * vertices, or its collapse was refused) at a new vertex beside that edge (rm_insert.c),
  * within the room reserved; returns the insertions made. With last

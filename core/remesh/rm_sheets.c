@@ -110,16 +110,13 @@ static bool third_sheet_possible(const rm_pass *p, uint32_t v, const uint32_t *n
     return false;
 }
 
-bool rm_junction_vertex(const rm_pass *p, uint32_t v)
+/* rm_junction_vertex past its screen: v's n neighbours nb, the ring's sheets. */
+static bool sheets_meet_at(const rm_pass *p, uint32_t v, const uint32_t *nb, int n)
 {
     const rm_mesh *r = &p->r;
-    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE], ring[ISM_RM_JUNCTION_RING];
+    uint32_t ring[ISM_RM_JUNCTION_RING];
     double dist[ISM_RM_JUNCTION_RING];
-    if (r->count[v] > ISM_RM_MERGE_MAX_DEGREE)
-        return false;
-    int n = rm_merge_neighbours(r, v, nb), nr = 0;
-    if (!third_sheet_possible(p, v, nb, n))
-        return false;
+    int nr = 0;
     for (int i = 0; i < n; i++)
         for (uint32_t s = 0; s < r->count[nb[i]]; s++) {
             const uint32_t *c = r->m->tri + 3 * (size_t)rm_slot(r, nb[i], s);
@@ -141,4 +138,28 @@ bool rm_junction_vertex(const rm_pass *p, uint32_t v)
         sum += rm_dist(rm_pos(p, v), rm_pos(p, nb[i]));
     }
     return d <= sum / n; /* the point within v's mean edge: the sheets meet at v */
+}
+
+/* v's neighbours into nb (how many: *n); false when v has too many triangles to ask. */
+static bool neighbours(const rm_pass *p, uint32_t v, uint32_t *nb, int *n)
+{
+    if (p->r.count[v] > ISM_RM_MERGE_MAX_DEGREE)
+        return false;
+    *n = rm_merge_neighbours(&p->r, v, nb);
+    return true;
+}
+
+bool rm_junction_vertex(const rm_pass *p, uint32_t v)
+{
+    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
+    int n;
+    return neighbours(p, v, nb, &n) && third_sheet_possible(p, v, nb, n) &&
+           sheets_meet_at(p, v, nb, n);
+}
+
+bool rm_junction_vertex_unscreened(const rm_pass *p, uint32_t v)
+{
+    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
+    int n;
+    return neighbours(p, v, nb, &n) && sheets_meet_at(p, v, nb, n);
 }
