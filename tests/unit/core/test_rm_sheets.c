@@ -3,10 +3,11 @@
  * eight corners; three unit balls' two triple points), in the box on the lattice and both
  * shifted ones (placements.h), it is true at the vertices on those points (within 1e-8 of
  * the box's diagonal: the polygoniser puts one vertex there) and false on every other vertex,
- * crease or smooth, but for the gap GAP_CELLS documents; and its screen (third_sheet_possible) changes no answer: every
- * vertex gets the same one from rm_junction_vertex_unscreened (revE 1: a screen off by a
- * constant, or a test saying yes on plain crease vertices, which would stop crease merges
- * everywhere, passed every test before). */
+ * crease or smooth, but for the gap GAP_CELLS documents; and its screen
+ * (third_sheet_possible) changes no answer: every vertex gets the same one from
+ * rm_junction_vertex_unscreened (revE 1: a screen off by a constant, or a test saying yes on
+ * plain crease vertices, which would stop crease merges everywhere, passed every test
+ * before). */
 #include <criterion/criterion.h>
 #include <math.h>
 
