@@ -7,7 +7,7 @@
  * on the whole chosen operand), so the two agree bit for bit and a caller may use either.
  *
  * Why: the dual mesher's straddle move takes the Hessian at the centre foot of every node
- * with both signs (dual.c sag_split), ~1,000 instructions a point alone on the torus.
+ * with both signs (dual_classify.c sag_split), ~1,000 instructions a point alone on the torus.
  *
  * The lanes are walked in groups of VL, each one value of GCC's vector extension (AVX2
  * registers in the AVX2 clone, chosen at run time, pairs of SSE2 ones otherwise); a batch

@@ -12,8 +12,9 @@
  * box compute only the Hessian, as the scalar pass's record does.
  *
  * Why: the dual mesher takes f and ∇f's natural enclosure over most children of a split
- * node (octree/dual.c classify); one box costs ~1,700 instructions on the torus's short
- * tape, most of them the instruction dispatch and the zero tests a batch shares.
+ * node (octree/dual_classify.c, ism_dual_classify_tail); one box costs ~1,700 instructions
+ * on the torus's short tape, most of them the instruction dispatch and the zero tests a
+ * batch shares.
  *
  * The lanes are walked in groups of ISM_IVG_VL, each one value of GCC's vector extension
  * (AVX2 registers in the AVX2 clone, chosen at run time, pairs of SSE2 ones otherwise); a

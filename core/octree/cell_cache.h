@@ -122,7 +122,7 @@ static inline ism_root_entry *ism_root_slot(ism_root_entry *table, uint64_t a, u
 
 /* ... and of root pairs on edges whose ends share a sign (ism_double_root_search): where a
  * piece found at a CSG kink may be a sliver (octree_build.c edges_see) and where the dual
- * mesher asks an edge for a hidden pair (dual.c edge_root_pair). Up to four nodes of a
+ * mesher asks an edge for a hidden pair (dual_classify.c edge_root_pair). Up to four nodes of a
  * level share an edge, and the answer is a function of the edge's two lattice points and
  * of f along it, which every node's shortened tape gives bit for bit inside its closed box
  * (sampler.h): a hit answers what the search would. 2^12 entries of 32 bytes a thread. */

@@ -779,7 +779,7 @@ bool ism_dual_reserve_vertices(dual *d, size_t n)
 
 /* Two crease leaves that found one point (within WELD_TOL of the box: Newton's rounding is
  * ~1e-16 of it, any bound far above) share one vertex: the later leaf takes the earlier
- * vertex and its own joins that one's twin chain (mark_misses splits every leaf on it).
+ * vertex and its own joins that one's twin chain (ism_dual_mark_misses splits every leaf on it).
  * Without it the two make triangles of no area (the lens's crease on the lattice plane
  * x = 0: every such triangle counted as turned over, split to depth.max). New vertices are
  * from nv0 on. */
@@ -846,7 +846,7 @@ static void make_vertices(dual *d)
         weld_crease(d, nv0);
 }
 
-/* The leaves marked by mark_misses split (expand: their children built level by level). */
+/* The leaves marked by ism_dual_mark_misses split (expand: their children built level by level). */
 static void split_marked(dual *d)
 {
     size_t n = 0;

@@ -454,7 +454,7 @@ enum { STEP_FAIL, STEP_GO, STEP_STOP };
 
 /* One Newton step of m along ∇f towards f = 0 (f and g = ∇f at m): STEP_FAIL without
  * moving m when ∇f vanishes or f, ∇f are not finite; else m moved, and STEP_STOP once the
- * step was below NEWTON_STOP of size. newton_onto and feet_in_nodes both step so. */
+ * step was below NEWTON_STOP of size. ism_dual_newton_onto and feet_in_nodes both step so. */
 static int newton_step(double m[3], double f, const double g[3], double size)
 {
     double gg = ism_dot3(g, g);
@@ -502,9 +502,10 @@ bool ism_dual_foot_in_node(worker *w, const double lo[3], const double hi[3], do
 }
 
 /* foot_in_node for n boxes at once (lo[k]..hi[k] of side size[k], n <= ISM_GRAD_BATCH):
- * newton_onto's steps in lanes, their gradients in one batch a step (ism_sample_grad_batch:
- * bit for bit ism_sample_grad's), a lane leaving where its own scalar run would stop. Into
- * m[k] and state[k]: FOOT_AT when the foot lands in the closed box, else FOOT_OUT. */
+ * ism_dual_newton_onto's steps in lanes, their gradients in one batch a step
+ * (ism_sample_grad_batch: bit for bit ism_sample_grad's), a lane leaving where its own scalar
+ * run would stop. Into m[k] and state[k]: FOOT_AT when the foot lands in the closed box,
+ * else FOOT_OUT. */
 void ism_dual_feet_in_nodes(worker *w, const double (*lo)[3], const double (*hi)[3],
                           const double *size, size_t n, double (*m)[3], uint8_t *state)
 {
@@ -522,7 +523,7 @@ void ism_dual_feet_in_nodes(worker *w, const double (*lo)[3], const double (*hi)
             memcpy(p[j], m[live[j]], sizeof p[j]);
         ism_sample_grad_batch(&w->s, (const double (*)[3])p, f, g, nl);
         size_t kept = 0;
-        for (size_t j = 0; j < nl; j++) { /* newton_onto's step, lane by lane */
+        for (size_t j = 0; j < nl; j++) { /* ism_dual_newton_onto's step, lane by lane */
             size_t k = live[j];
             int r = newton_step(m[k], f[j], g[j], size[k]);
             ok[k] = r != STEP_FAIL;

@@ -189,7 +189,7 @@ static uint64_t tri_key(const dual *d, size_t t)
 /* What the clip by the request's box (dual_box.h) does to triangle t: CLIP_DROPS it whole
  * (every corner beyond one plane by more than the snap: not measured here, the clip measures
  * every piece it makes), CLIP_TOUCHES it (a plane across it, or a corner within the snap of
- * one: the probe clips it, mark_cut_misses), or keeps it as it is (CLIP_KEEPS). */
+ * one: the probe clips it, ism_dual_mark_cut_misses), or keeps it as it is (CLIP_KEEPS). */
 enum { CLIP_KEEPS, CLIP_TOUCHES, CLIP_DROPS };
 
 static int clip_of(const dual *d, size_t t)
@@ -277,13 +277,13 @@ static bool mark_leaf(dual *d, int32_t leaf, size_t *marked)
     return true;
 }
 
-/* A fan's triangle t (emit_quads: the fan's centre c is corner 2 of each of its four, which
- * follow one another) whose own leaves are at depth.max: the leaves of the fan's other
- * corners are marked instead (the quad's far side). A quad between leaves two levels apart
- * is a sliver whose centre may fall beyond its near side: the spindle torus at E 1e-2 in the
- * irrational box had a fan triangle turned over between two depth-9 leaves and two depth-7
- * ones (where the quad's other diagonal met E) and declined (error_at_max_depth). True when
- * one can split. */
+/* A fan's triangle t (ism_dual_emit_quads: the fan's centre c is corner 2 of each of its
+ * four, which follow one another) whose own leaves are at depth.max: the leaves of the fan's
+ * other corners are marked instead (the quad's far side). A quad between leaves two levels
+ * apart is a sliver whose centre may fall beyond its near side: the spindle torus at E 1e-2
+ * in the irrational box had a fan triangle turned over between two depth-9 leaves and two
+ * depth-7 ones (where the quad's other diagonal met E) and declined (error_at_max_depth).
+ * True when one can split. */
 static bool mark_fan_leaves(dual *d, size_t t, size_t *marked)
 {
     uint32_t c = d->tri[3 * t + 2];

@@ -44,8 +44,8 @@ static const double shifts[] = {0, 1e-3 * FINEST, PF_IRR * FINEST};
 #define SPHERE_ROOM 1.2
 #define TORUS_ROOM 1.05
 /* ... torus 1e-2 in the three boxes 1.17–1.18 times (1,792 / 1,792 / 1,776 triangles) since a
- * missed triangle splits only its coarsest leaves (dual.c coarsest_open); 1.67–1.75 when it
- * split all of them: 1.4 fails that. */
+ * missed triangle splits only its coarsest leaves (dual_measure.c coarsest_open); 1.67–1.75
+ * when it split all of them: 1.4 fails that. */
 #define COARSE_TORUS_ROOM 1.4
 /* A sheet through lattice corners (sheet_through_lattice_corners): measured there. */
 #define CORNER_ROOM 2.0
@@ -231,7 +231,7 @@ static void torus_proofs_within(double e, uint64_t most)
 }
 
 /* A node with both signs whose chord a node long would sag over twice the room E + shift at
- * its centre's foot is split before its proofs (dual.c sag_split): the torus at E 3.57e-3
+ * its centre's foot is split before its proofs (dual_classify.c sag_split): the torus at E 3.57e-3
  * (the bench's setting for its 3e-3 target; r 0.3 against depth-3 and depth-4 cells of
  * 0.375 and 0.1875, all of them split in the end) took 8,360 / 8,360 / 8,476 interval
  * evaluations in the three boxes before the rule and takes 5,904 / 5,904 / 6,026 after it
@@ -252,8 +252,8 @@ Test(dual, sag_split_spares_the_proofs)
 
 /* Where the surface bends one way, a node whose chord its size sags, by the least principal
  * curvature, more than SAG_ROUND (1.2) times the room E + shift is split before its vertex
- * (dual.c sag_split): the unit sphere in ±1.5 (three placements) at E 7.14e-3 (the bench's
- * setting for its 3e-3 target). Its level-3 cells are 0.375 across: k h² / 8 = 0.0176
+ * (dual_classify.c sag_split): the unit sphere in ±1.5 (three placements) at E 7.14e-3 (the
+ * bench's setting for its 3e-3 target). Its level-3 cells are 0.375 across: k h² / 8 = 0.0176
  * against E + 0.9 E = 0.0136, 1.30 times, so none is kept; level 4 is 0.33 times, so the
  * first mesh is the level-4 mesh and meets E with no measure-and-split round (before the
  * rule: the level-3 mesh first, 126 quads fanned, every leaf then split — one round). Still
