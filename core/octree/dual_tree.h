@@ -1,8 +1,9 @@
 /* dual_tree.h — the dual mesher's state (dual.c), shared by the files that make up the
  * mesher: the octree's nodes, the per-thread workers that evaluate f, the vertices,
  * triangles and quads of a round, the memos kept across rounds, and the few helpers every
- * part reads the tree with. Private to core/octree/dual*.c: dual.h is the mesher's public
- * face. */
+ * part reads the tree with — besides two that read no tree, declared here because another
+ * part borrows them (Newton onto f = 0, room for vertices: at the end). Private to
+ * core/octree/dual*.c: dual.h is the mesher's public face. */
 #ifndef ISM_DUAL_TREE_H
 #define ISM_DUAL_TREE_H
 
@@ -131,8 +132,6 @@ static inline bool grow(void **p, size_t *cap, size_t need, size_t size)
     return ism_grow(p, cap, need, size, 64);
 }
 
-static inline int child_at(const int bits[3]) { return bits[0] | bits[1] << 1 | bits[2] << 2; }
-
 static inline void corner_point(const dual *d, const dnode *n, int c, double p[3])
 {
     int32_t step = ism_grid_cell_steps(&d->g, n->level);
@@ -176,11 +175,14 @@ static inline size_t chunks(size_t n)
     return (n + MEASURE_LANES - 1) / MEASURE_LANES;
 }
 
+/* Two helpers that read no tree, here because a second part borrows them. */
 /* m moved onto f = 0 by Newton along ∇f, stopping once a step is below NEWTON_STOP of
- * size (dual.c); false when it could not finish a step (∇f vanishing or not finite). */
+ * size (dual_classify.c's; dual.c's leaf vertices and dual_measure.c's fan centres call it
+ * too); false when it could not finish a step (∇f vanishing or not finite). */
 bool ism_dual_newton_onto(worker *w, double m[3], double size);
 
-/* Room for n more vertices (positions and leaves, dual.c); false when out of memory. */
+/* Room for n more vertices (positions and leaves; dual.c's, dual_measure.c's fan centres
+ * take room by it too); false when out of memory. */
 bool ism_dual_reserve_vertices(dual *d, size_t n);
 
 /* fmin and fmax as the comparisons they are (a NaN argument gives the other one; the sign of

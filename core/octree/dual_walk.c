@@ -19,6 +19,9 @@
 static const int AROUND_U[4] = {0, 1, 1, 0};
 static const int AROUND_V[4] = {0, 0, 1, 1};
 
+/* The child index of the octant at bits (0: low half, 1: high, per axis). */
+static inline int child_at(const int bits[3]) { return bits[0] | bits[1] << 1 | bits[2] << 2; }
+
 /* A call of the tree walk put off to run on the pool: a cell (c[0]), a face (c[0] below
  * c[1] across axis) or an edge (c[0..4) round an edge along axis). */
 typedef struct walk_call {
