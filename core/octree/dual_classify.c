@@ -55,7 +55,23 @@
  * made, every leaf then split). Whole runs (bench_error mesh S E 10, callgrind, ism_mesh_surface):
  * sphere 7.14e-3 10.61M -> 9.10M, 1.3e-3 42.40M -> 38.70M, the same triangle counts and max
  * centroid errors; 0.0141 and the torus at 0.0141 / 3.57e-3 / 1.19e-3 unchanged (its k2 h² / 8
- * stays below; SAG_ROUND 1.0 and 1.5 measured the same but for 1.5 at 7.14e-3). */
+ * stays below; SAG_ROUND 1.0 and 1.5 measured the same but for 1.5 at 7.14e-3). Why 1.2, not
+ * a margin that only splits nodes the measure would: the ratio alone cannot tell them apart.
+ * The sphere's level 3 at 7.14e-3 (1.30) had every leaf split, its level 4 at 1.73e-3 (1.34)
+ * kept some, so no margin catches the first and spares the second; 1.2 sits under 1.30 and
+ * takes that cost. Rule on against off (SAG_ROUND 1e300), isomesh --stats --threads 1,
+ * every preset at the default E (1e-3 x diagonal) and E/3 in its own box, and the convex
+ * and one-way presets (sphere, ellipsoid, tooth, two-spheres, blob-pair, sphere-pair-param,
+ * spindle-cyclide, tanglecube, pretzel-genus2, torus, linked-tori, heart) at 3, 1, 1/3 and
+ * 1/10 E in the own, 1e-3 and irr boxes: triangles changed in 16 of those 144 runs — sphere
+ * E/3 3,996 / 4,002 / 4,004 -> 4,188 (+4.6-4.8%: the level-5 mesh; max centroid 1.68e-3 ->
+ * 0.91e-3), tanglecube E/3 +0.2% (and +0.02% at E/10 irr), ellipsoid E/10 -0.04 to -0.17%,
+ * blob-pair E/3 and E/10 -0.1 to -0.7% — and in none of the other presets' own-box runs
+ * (the box-cut ones bend both ways; tooth, two-spheres, linked-tori, sphere-pair-param,
+ * spindle-cyclide and heart take the primal path). Every dual run within E. Instructions
+ * (callgrind --toggle-collect=ism_mesh_surface, own box): sphere E 11.14M -> 9.24M (-17%),
+ * E/3 39.66M -> 37.00M (-6.7%), blob-pair E/3 89.79M -> 89.20M, E/10 204.52M -> 193.23M
+ * (-5.5%), ellipsoid E/10 102.84M -> 102.26M, tanglecube E/3 336.18M -> 335.36M. */
 #define SAG_ROUND 1.2
 
 /* f kept from 0 along edge c0 -> c1 (axis a, length h) by the mean-value form from both
