@@ -13,6 +13,47 @@ typedef struct ism_chain {
     double g, g1, g2;
 } ism_chain;
 
+/* u^n into *g and u^(n - 2) into *p2 (n >= 2) by ism_powi's products; with them g' = n (p2 u)
+ * and g'' = n (n - 1) p2. x^4 and x^3, the powers presets use, are written out — (u²)² and
+ * u (u²), ism_powi's own products (its final 1 × p exact) — where the squaring loop ran once
+ * for g and once for p2. Every evaluator's integer power and its derivatives come from here
+ * (ism_unary_chain, eval_gradient.c's dual_step) or from ism_powi_chain_lanes below. */
+static inline void ism_powi_chain(double u, unsigned n, double *g, double *p2)
+{
+    if (n == 4) {
+        *p2 = u * u;
+        *g = *p2 * *p2;
+    } else if (n == 3) {
+        *p2 = u;
+        *g = u * (u * u);
+    } else {
+        *p2 = ism_powi(u, n - 2);
+        *g = ism_powi(u, n);
+    }
+}
+
+/* ism_powi_chain on w values at once (w at most ISM_POWI_LANES, a constant where inlined):
+ * g[j], p2[j] for u[j], the same products lane by lane (eval_gradient_batch.c). */
+static inline __attribute__((always_inline)) void
+ism_powi_chain_lanes(const double *restrict u, unsigned n, double *restrict g,
+                     double *restrict p2, size_t w)
+{
+    if (n == 4) {
+        for (size_t j = 0; j < w; j++) {
+            p2[j] = u[j] * u[j];
+            g[j] = p2[j] * p2[j];
+        }
+    } else if (n == 3) {
+        for (size_t j = 0; j < w; j++) {
+            p2[j] = u[j];
+            g[j] = u[j] * (u[j] * u[j]);
+        }
+    } else {
+        ism_powi_lanes(p2, u, n - 2, w);
+        ism_powi_lanes(g, u, n, w);
+    }
+}
+
 static inline ism_chain ism_unary_chain(const ism_instr *in, double u)
 {
     ism_chain r = { 0.0, 0.0, 0.0 };
@@ -34,8 +75,8 @@ static inline ism_chain ism_unary_chain(const ism_instr *in, double u)
     case ISM_OP_SQUARE: r.g = u * u; r.g1 = 2.0 * u; r.g2 = 2.0; break;
     case ISM_OP_POWI: {
         unsigned n = in->b;
-        double p2 = ism_powi(u, n - 2);
-        r.g = ism_powi(u, n);
+        double p2;
+        ism_powi_chain(u, n, &r.g, &p2);
         r.g1 = n * (p2 * u);
         r.g2 = (double)n * (n - 1) * p2;
         break;

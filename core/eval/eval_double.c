@@ -231,29 +231,13 @@ KERNEL_R(k_tan, tan(a[j]))
 KERNEL_R(k_exp, exp(a[j]))
 KERNEL_R(k_log, ism_log_clip(a[j]))
 
-/* a^n lane by lane, with the same products as ism_powi. */
+/* a^n lane by lane, with the same products as ism_powi (ism_powi_lanes). */
+_Static_assert(LANES <= ISM_POWI_LANES, "a group's powers in one ism_powi_lanes call");
 static void powi_lanes(double *restrict out, const double *restrict ra, unsigned n,
                        size_t ngroups)
 {
-    for (size_t g = 0; g < ngroups; g++) {
-        double p[LANES], r[LANES];
-        for (size_t j = 0; j < LANES; j++) {
-            p[j] = ra[g * LANES + j];
-            r[j] = 1.0;
-        }
-        for (unsigned m = n;;) {
-            if (m & 1u)
-                for (size_t j = 0; j < LANES; j++)
-                    r[j] *= p[j];
-            m >>= 1;
-            if (!m)
-                break;
-            for (size_t j = 0; j < LANES; j++)
-                p[j] *= p[j];
-        }
-        for (size_t j = 0; j < LANES; j++)
-            out[g * LANES + j] = r[j];
-    }
+    for (size_t g = 0; g < ngroups; g++)
+        ism_powi_lanes(out + g * LANES, ra + g * LANES, n, LANES);
 }
 
 static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, double *regs, size_t ngroups)

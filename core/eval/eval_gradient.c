@@ -166,18 +166,9 @@ static inline __attribute__((always_inline)) void dual_step(const ism_instr *in,
        catenoid's cosh about 60 besides exp itself */
     case ISM_OP_POWI: {
         unsigned n = in->b;
-        double u = a->v, g, p2;
-        if (n == 4) { /* ism_powi's squarings, its final 1 × p exact: (u²)², u² */
-            p2 = u * u;
-            g = p2 * p2;
-        } else if (n == 3) { /* u (u²), u */
-            p2 = u;
-            g = u * (u * u);
-        } else {
-            p2 = ism_powi(u, n - 2);
-            g = ism_powi(u, n);
-        }
-        dual_chain(o, g, n * (p2 * u), a);
+        double g, p2;
+        ism_powi_chain(a->v, n, &g, &p2);
+        dual_chain(o, g, n * (p2 * a->v), a);
         return;
     }
     case ISM_OP_EXP: {

@@ -18,6 +18,7 @@
 
 #define GL ISM_GRAD_BATCH
 #define VL 4 /* lanes per group: one AVX2 vector, two SSE2 ones */
+_Static_assert(VL <= ISM_POWI_LANES, "a group's powers in one ism_powi_chain_lanes call");
 
 /* Component k (0: value, 1-3: d/dx, d/dy, d/dz) of register r. */
 static inline double *comp(double *regs, uint32_t r, int k)
@@ -117,21 +118,6 @@ INLINE void k_chain_c(double *o, double g1, const double *a)
 INLINE void k_fill(double *o, double c)
 {
     st(o, (v4d){c, c, c, c});
-}
-
-/* ism_powi lane by lane: a^n by the same repeated squaring (a^4 and a^3, the powers presets
- * use, written out at their call: (a²)² and a (a²), ism_powi's products, its 1 × p exact) */
-INLINE v4d v_powi(v4d a, unsigned n)
-{
-    v4d r = {1.0, 1.0, 1.0, 1.0}, p = a;
-    while (n) {
-        if (n & 1u)
-            r = r * p;
-        n >>= 1;
-        if (n)
-            p = p * p;
-    }
-    return r;
 }
 
 /* The three partials of out = g(a) from per-lane g' (g1v) or one g' for all (g1c). */
@@ -266,14 +252,14 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         }
         break;
     case ISM_OP_POWI: { /* a^n and n a^(n-2) a: ism_unary_chain's g and g', lane by lane
-                           the same products (ism_powi's squarings): through it, 74
+                           the same products (ism_powi_chain_lanes): through it, 74
                            instructions a lane on chmutov-quartic's x^4 */
         unsigned e = in->b;
         v4d nv = {(double)e, (double)e, (double)e, (double)e};
         for (size_t g = 0; g < ng; g++) {
-            v4d a = ld(av + g * VL), p2 = e == 4 ? a * a : e == 3 ? a : v_powi(a, e - 2);
-            st(ov + g * VL, e == 4 ? p2 * p2 : e == 3 ? a * (a * a) : v_powi(a, e));
-            st(g1 + g * VL, nv * (p2 * a));
+            double p2[VL];
+            ism_powi_chain_lanes(av + g * VL, e, ov + g * VL, p2, VL);
+            st(g1 + g * VL, nv * (ld(p2) * ld(av + g * VL)));
         }
         break;
     }

@@ -8,6 +8,7 @@
 #define ISM_SCALAR_OPS_H
 
 #include <math.h>
+#include <stddef.h>
 
 static inline double ism_clip0(double a) { return a > 0.0 ? a : 0.0; }
 
@@ -35,6 +36,33 @@ static inline double ism_powi(double a, unsigned n)
             p *= p;
     }
     return r;
+}
+
+/* ism_powi on w values at once: out[j] = a[j]^n by the same products lane by lane (the one
+ * place besides ism_powi that spells them out: the batched evaluators call this). w at most
+ * ISM_POWI_LANES (eval_double.c's group); where it is inlined with a constant w the loops
+ * vectorise. out and a distinct (no tape instruction writes a register it reads). */
+#define ISM_POWI_LANES 32
+static inline __attribute__((always_inline)) void ism_powi_lanes(double *restrict out,
+                                                                 const double *restrict a,
+                                                                 unsigned n, size_t w)
+{
+    double p[ISM_POWI_LANES], r[ISM_POWI_LANES];
+    for (size_t j = 0; j < w; j++) {
+        p[j] = a[j];
+        r[j] = 1.0;
+    }
+    while (n) {
+        if (n & 1u)
+            for (size_t j = 0; j < w; j++)
+                r[j] *= p[j];
+        n >>= 1;
+        if (n)
+            for (size_t j = 0; j < w; j++)
+                p[j] *= p[j];
+    }
+    for (size_t j = 0; j < w; j++)
+        out[j] = r[j];
 }
 
 #endif
