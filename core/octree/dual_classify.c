@@ -68,7 +68,8 @@
  * 0.91e-3), tanglecube E/3 +0.2% (and +0.02% at E/10 irr), ellipsoid E/10 -0.04 to -0.17%,
  * blob-pair E/3 and E/10 -0.1 to -0.7% — and in none of the other presets' own-box runs
  * (the box-cut ones bend both ways; tooth, two-spheres, linked-tori, sphere-pair-param,
- * spindle-cyclide and heart take the primal path). Every dual run within E. Instructions
+ * spindle-cyclide and heart take the primal path); mesh_identity.py: 1 of its 217 runs
+ * (sphere irr, --quality good). Every dual run within E. Instructions
  * (callgrind --toggle-collect=ism_mesh_surface, own box): sphere E 11.14M -> 9.24M (-17%),
  * E/3 39.66M -> 37.00M (-6.7%), blob-pair E/3 89.79M -> 89.20M, E/10 204.52M -> 193.23M
  * (-5.5%), ellipsoid E/10 102.84M -> 102.26M, tanglecube E/3 336.18M -> 335.36M. */
