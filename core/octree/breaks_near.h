@@ -13,7 +13,7 @@
  * per node; leaves[k] is leaf k's node, polygonised unless reuse[k] >= 0): a superset of
  * those whose closed box touches a polygonised leaf's. A leaf's queries walk the sides of the
  * tiles on its faces, which lie in its closed box and begin at a corner of a leaf having
- * that side as an edge (face_lines.c side_breaks); every registered point inside that box is
+ * that side as an edge (face_lines.c tile_side); every registered point inside that box is
  * a corner of a leaf touching it, and a successor at or past a side's end ends the walk
  * whichever it is. So a registry of these leaves answers those queries as the whole tree's
  * does. False when out of memory. */

@@ -4,7 +4,7 @@
  * polygonised one's), and inside a polygonised leaf's closed box the smaller registry holds
  * the same points as the whole tree's, each with the same successor on its three lattice
  * lines up to the box's end (past it, any successor at or beyond the end: the walks stop
- * there, face_lines.c side_breaks). A leaf in `stride` polygonised, each tree in the three
+ * there, face_lines.c tile_side). A leaf in `stride` polygonised, each tree in the three
  * boxes: the torus at depth 7; a plane and a sphere cut by the box (polygonised leaves on the
  * root box's upper faces, the grid's last cell); and a torus with a small ball beside it at
  * depths 1 to 10 (leaves of levels 2 to 8 beside the grid's cells of level 6). Each tree's
