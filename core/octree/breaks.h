@@ -49,10 +49,10 @@ static inline const ism_break_point *ism_breaks_find(const ism_breaks *b, const 
     }
 }
 
-/* Asks the memory for p's slot (a query follows soon). Always inlined: GCC 12 finds a
- * function whose only statement is a prefetch free of side effects and drops its calls, so
- * as a plain static inline this compiled to nothing (objdump: no prefetch in face_lines.o's
- * lattice_entry nor in breaks.c's fill_block). */
+/* Asks the memory for p's slot (a query follows soon). Always inlined: as a plain static
+ * inline, GCC 12.2 at -O2 left no prefetch instruction in face_lines.c's lattice_entry nor
+ * in breaks.c's fill_block (objdump), and with always_inline lattice_entry has one. What
+ * drops it depends on the caller: a small wrapper with one caller kept its prefetch. */
 static inline __attribute__((always_inline)) void ism_breaks_prefetch(const ism_breaks *b,
                                                                       const int32_t p[3])
 {
