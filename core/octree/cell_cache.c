@@ -17,7 +17,6 @@ bool ism_cell_cache_init(ism_cell_cache *c, ism_pool *pool, ism_par_cost *cost)
     c->quiet = ism_zeroed_alloc(pool, (size_t)1 << ISM_QUIET_CACHE_BITS, sizeof *c->quiet, cost);
     c->tiles = ism_zeroed_alloc(pool, (size_t)1 << ISM_TILE_MEMO_BITS, sizeof *c->tiles, cost);
     c->round = 1;
-    c->walk_every_tile = false;
     return c->points && c->segments && c->quiet && c->tiles;
 }
 

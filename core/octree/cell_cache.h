@@ -78,8 +78,6 @@ typedef struct ism_cell_cache {
     ism_quiet_tile *quiet;
     ism_tile_memo *tiles;
     uint32_t round;  /* the current max_error round (from 1) */
-    bool walk_every_tile; /* quiet and tiles are neither asked nor filled (poly_options.h's
-                             walk_every_tile: the reference the tests compare hits with) */
 } ism_cell_cache;
 
 /* A thread's empty memo, zeroed on pool's threads (what that cost added to *cost when not

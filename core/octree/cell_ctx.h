@@ -26,6 +26,9 @@ typedef struct ism_cell_ctx {
     double max_error;         /* > 0: polygons may be fanned from a corner within this
                                  distance of f = 0 (triangulate.h); 0: from their centre
                                  (no bound, or a singular locus is known: options.quiet) */
+    bool walk_every_tile;     /* the tile memos (cell_cache.h) are neither asked nor filled
+                                 (poly_options.h's walk_every_tile: the reference the tests
+                                 compare memo hits with) */
     /* scratch, reused from node to node */
     ism_bpoint *bp;
     size_t nbp, cap_bp;

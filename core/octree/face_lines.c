@@ -1265,7 +1265,7 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
 {
     cx->zero_tile = false;
     ism_quiet_tile key = quiet_key(t), unused;
-    if (cx->cache.walk_every_tile)
+    if (cx->walk_every_tile)
         return walk_tile(cx, t, &key, &unused);
     uint64_t hash = tile_hash(&key);
     ism_quiet_tile *q = quiet_slot(cx, hash);

@@ -18,7 +18,7 @@ void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *tile);
 
 /* Appends to cx->lines the lines of f = 0 on one tile (a face or part of a face): walked, or
  * copied from the thread's memo of tiles walked in the round (cell_cache.h; unless
- * cx->cache.walk_every_tile). When f vanishes on the whole tile (a plane of the surface
+ * cx->walk_every_tile). When f vanishes on the whole tile (a plane of the surface
  * lying in the lattice), sets cx->zero_tile, leaves cx->bp holding its boundary and adds no
  * lines. */
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *tile);

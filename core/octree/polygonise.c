@@ -533,6 +533,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->s.dist_above = o->max_error;
         cx->s.rays_below = o->nquiet ? INFINITY : 0;
         cx->s.batch = !o->scalar_eval;
+        cx->walk_every_tile = o->walk_every_tile;
         cx->s.wedge_edges_below = ism_crease_wedge_edges(&tree->grid, o->max_depth, o->max_error);
         cx->s.crease_pieces = ism_crease_pieces(f);
         cx->s.fold_below = ism_crease_fold_below(o->max_error);
@@ -550,7 +551,6 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         if (!(cx->s.ws = ism_eval_ws_new(f)) ||
             !round_cache(c, pool, &outer->par, t, &cx->cache))
             goto done;
-        cx->cache.walk_every_tile = o->walk_every_tile;
     }
     ism_pool_for(pool, p.nchunks, run_chunk, &p, &outer->par);
     status = atomic_load(&p.status);
