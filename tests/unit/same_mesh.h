@@ -27,23 +27,32 @@ static inline bool test_same_mesh(const ism_mesh *a, const ism_mesh *b)
            test_same_bytes(a->seg, b->seg, a->nsegs * 2 * sizeof *a->seg);
 }
 
-/* t meshed in box to depth 2..dmax (under max_error when > 0) on threads threads, by the
- * scalar evaluators when scalar; st: its stats. */
+/* t meshed with the options base (box, depths, max_error and threads replaced) in box to
+ * depth 2..dmax (under max_error when > 0) on threads threads; st: its stats. */
+static inline void test_mesh_with(const ism_tape *t, const ism_poly_options *base,
+                                  const double box[6], int dmax, double max_error, int threads,
+                                  ism_mesh *m, ism_poly_stats *st)
+{
+    ism_poly_options o = *base;
+    memcpy(o.box, box, 6 * sizeof *box);
+    o.min_depth = 2;
+    o.max_depth = dmax;
+    o.max_error = max_error;
+    o.threads = threads;
+    ism_error err;
+    ism_mesh_init(m);
+    cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
+}
+
+/* test_mesh_with the default options, by the scalar evaluators when scalar. */
 static inline void test_mesh_of(const ism_tape *t, const double box[6], int dmax,
                                 double max_error, int threads, bool scalar, ism_mesh *m,
                                 ism_poly_stats *st)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
-    memcpy(o.box, box, 6 * sizeof *box);
-    o.min_depth = 2;
-    o.max_depth = dmax;
-    o.max_error = max_error;
-    o.threads = threads;
     o.scalar_eval = scalar;
-    ism_error err;
-    ism_mesh_init(m);
-    cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
+    test_mesh_with(t, &o, box, dmax, max_error, threads, m, st);
 }
 
 #endif

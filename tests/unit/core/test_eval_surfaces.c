@@ -2,6 +2,7 @@
  * of its own), and the shared random generator. */
 #include <criterion/criterion.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "test_eval_surfaces.h"
 
@@ -46,6 +47,15 @@ ism_tape *test_surface_compile(const test_surface *s)
                                    &err);
     cr_assert_not_null(t, "%s: %s", s->name, ism_error_format(&err, msg, sizeof msg));
     return t;
+}
+
+const test_surface *test_surface_named(const char *name)
+{
+    for (size_t i = 0; i < TEST_NSURFACES; i++)
+        if (strcmp(TEST_SURFACES[i].name, name) == 0)
+            return &TEST_SURFACES[i];
+    cr_assert_fail("no test surface %s", name);
+    return NULL;
 }
 
 double test_uniform(test_rng *r, double lo, double hi)

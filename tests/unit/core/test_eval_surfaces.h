@@ -24,6 +24,9 @@ extern const size_t TEST_NSURFACES;
 /* Compiles a surface (fails the test on error). */
 ism_tape *test_surface_compile(const test_surface *s);
 
+/* The surface of TEST_SURFACES called name (fails the test when there is none). */
+const test_surface *test_surface_named(const char *name);
+
 /* splitmix64: a reproducible stream of uniform doubles. */
 typedef struct test_rng {
     uint64_t s;

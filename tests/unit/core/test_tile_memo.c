@@ -12,37 +12,20 @@
  * threads. And the memos are really used: with them the cells evaluate f fewer times (over
  * all these runs). */
 #include <criterion/criterion.h>
-#include <string.h>
 #include "poly_fixture.h"
 #include "test_eval_surfaces.h"
 #include "tests/unit/same_mesh.h"
 
-/* s meshed in box to depth 2..dmax under max_error (0: none) on `threads` threads, with the
- * tile memos or without (walk_every_tile). */
+/* s meshed in box to depth 2..dmax under max_error (0: none) on `threads` threads, by the
+ * primal cells (those that walk tiles), with the tile memos or without (walk_every_tile). */
 static void mesh_of(const ism_tape *t, const double box[6], int dmax, double max_error,
                     int threads, bool walk_every_tile, ism_mesh *m, ism_poly_stats *st)
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
-    memcpy(o.box, box, sizeof o.box);
-    o.min_depth = 2;
-    o.max_depth = dmax;
-    o.max_error = max_error;
-    o.threads = threads;
-    o.dual = false; /* the primal cells: those that walk tiles */
+    o.dual = false;
     o.walk_every_tile = walk_every_tile;
-    ism_error err;
-    ism_mesh_init(m);
-    cr_assert_eq(ism_polygonise(t, &o, m, st, &err), ISM_POLY_OK, "%s", err.message);
-}
-
-static const test_surface *surface(const char *name)
-{
-    for (size_t i = 0; i < TEST_NSURFACES; i++)
-        if (strcmp(TEST_SURFACES[i].name, name) == 0)
-            return &TEST_SURFACES[i];
-    cr_assert_fail("no test surface %s", name);
-    return NULL;
+    test_mesh_with(t, &o, box, dmax, max_error, threads, m, st);
 }
 
 Test(tile_memo, a_hit_is_the_fresh_walk_bit_for_bit, .timeout = 240)
@@ -61,7 +44,7 @@ Test(tile_memo, a_hit_is_the_fresh_walk_bit_for_bit, .timeout = 240)
     };
     uint64_t evals[2] = {0, 0}; /* f and ∇f evaluations over all runs, with and without */
     for (size_t c = 0; c < sizeof cases / sizeof cases[0]; c++) {
-        const test_surface *s = surface(cases[c].name);
+        const test_surface *s = test_surface_named(cases[c].name);
         ism_tape *t = test_surface_compile(s);
         int dmax = cases[c].dmax - pf_quick();
         uint64_t rounds = 0; /* rounds after the first, over the boxes and thread counts */
