@@ -48,6 +48,10 @@ typedef struct ism_cell_ctx {
     ism_tile *zero;           /* the current node's tiles lying in f = 0 */
     size_t nzero, cap_zero;
     ism_cell_stats stats;
+    /* the tile memos' hits, kept out of stats (a memo entry copies stats, and a later round's
+     * copied leaf adds its stats again): work saved, not a fact of the mesh */
+    uint64_t quiet_skips;     /* tiles found in the quiet memo: not walked again */
+    uint64_t tile_replays;    /* tiles whose lines were copied from the crossed-tile memo */
 } ism_cell_ctx;
 
 #endif

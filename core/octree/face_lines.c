@@ -1269,11 +1269,15 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
         return walk_tile(cx, t, &key, &unused);
     uint64_t hash = tile_hash(&key);
     ism_quiet_tile *q = quiet_slot(cx, hash);
-    if (q->where == key.where && q->span == key.span)
+    if (q->where == key.where && q->span == key.span) {
+        cx->quiet_skips++;
         return true; /* walked before: nothing crosses its boundary */
+    }
     ism_tile_memo *m = memo_slot(cx, hash);
-    if (m->key.where == key.where && m->key.span == key.span)
+    if (m->key.where == key.where && m->key.span == key.span) {
+        cx->tile_replays++;
         return replay(cx, m); /* walked before: lines cross it */
+    }
     size_t first = cx->lines.n;
     ism_cell_stats before = cx->stats;
     if (!walk_tile(cx, t, &key, q))

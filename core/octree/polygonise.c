@@ -357,6 +357,8 @@ static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
     st->crossed_faces += cx->stats.crossed_faces;
     st->lifted_polygons += cx->stats.lifted_polygons;
     st->lifted_chords += cx->stats.lifted_chords;
+    st->quiet_skips += cx->quiet_skips;
+    st->tile_replays += cx->tile_replays;
     st->evals_point += cx->s.n_point;
     st->evals_gradient += cx->s.n_gradient;
     st->evals_interval += cx->s.n_interval;

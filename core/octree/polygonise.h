@@ -94,6 +94,10 @@ typedef struct ism_poly_stats {
                                     point above them on the node's side (face_flat.h) */
     uint64_t lifted_chords;      /* face lines along one side of their tile, taken through
                                     their arc's point across the tile (face_flat.h) */
+    uint64_t quiet_skips;        /* tiles a node did not walk: the thread walked them before
+                                    and nothing crossed them (cell_cache.h's quiet memo) */
+    uint64_t tile_replays;       /* tiles a node did not walk: their lines copied from the
+                                    thread's first walk (cell_cache.h's crossed-tile memo) */
     uint64_t evals_point;        /* f evaluations */
     uint64_t evals_interval;     /* interval evaluations */
     uint64_t evals_gradient;     /* gradient evaluations */

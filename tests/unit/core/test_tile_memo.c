@@ -9,8 +9,9 @@
  * ball (a crease; under a bound it takes rounds after the first), each in its box,
  * moved by 1e-3 and by irrational fractions of a finest cell, with and without an error
  * bound (the gyroid's rounds: the memos are forgotten between rounds), on 1 and 2
- * threads. And the memos are really used: with them the cells evaluate f fewer times (over
- * all these runs). */
+ * threads. And the memos are really used: in every run tiles are found in both (counted
+ * in ism_poly_stats' quiet_skips and tile_replays, both 0 without them), and the cells
+ * evaluate f fewer times (over all these runs). */
 #include <criterion/criterion.h>
 #include "poly_fixture.h"
 #include "test_eval_surfaces.h"
@@ -69,6 +70,15 @@ Test(tile_memo, a_hit_is_the_fresh_walk_bit_for_bit, .timeout = 240)
                 cr_expect_eq(st[0].crossed_faces, st[1].crossed_faces, "%s box %d", n, w);
                 cr_expect_eq(st[0].lifted_chords, st[1].lifted_chords, "%s box %d", n, w);
                 cr_expect_eq(st[0].nonmanifold_lines, st[1].nonmanifold_lines, "%s box %d", n,
+                             w);
+                /* the memos are asked and hit: quiet tiles skipped and crossed tiles copied
+                 * (each face is walked from its two nodes), and never under walk_every_tile */
+                cr_expect_gt(st[0].quiet_skips, 0, "%s box %d, %d threads: no quiet tile "
+                             "skipped", n, w, threads);
+                cr_expect_gt(st[0].tile_replays, 0, "%s box %d, %d threads: no tile replayed",
+                             n, w, threads);
+                cr_expect_eq(st[1].quiet_skips, 0, "%s box %d: walk_every_tile skipped", n, w);
+                cr_expect_eq(st[1].tile_replays, 0, "%s box %d: walk_every_tile replayed", n,
                              w);
                 for (int every = 0; every < 2; every++)
                     evals[every] += st[every].evals_point + st[every].evals_gradient;
