@@ -1060,8 +1060,8 @@ static ism_quiet_tile quiet_key(const ism_tile *t)
  * words are folded into one before the mixer as `where` times an odd constant plus `span`:
  * a plain sum would add u0 to v1 and the plane to u1, so tiles with those swapped would fold
  * alike, while an odd multiplier is a bijection on 64 bits that moves `where`'s fields off
- * the span's (31 is what the quiet table always used; the tile memo's 37 had no reason of
- * its own). A fold collision only costs a miss: each slot compares the whole key. */
+ * the span's (any odd one does; 31 is small). A fold collision only costs a miss: each slot
+ * compares the whole key. */
 static uint64_t tile_hash(const ism_quiet_tile *k)
 {
     return ism_cache_mix(k->where * 31 + k->span);
