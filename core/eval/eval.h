@@ -3,7 +3,11 @@
  * tape shortening for min/max.
  *
  * A workspace holds the registers of one evaluation; give each thread its own. A workspace
- * made for a tape also serves every tape shortened from it. */
+ * made for a tape also serves every tape shortened from it.
+ *
+ * "Bit for bit" below means every number, ±0 and ±inf; a NaN lane is NaN where the one-point
+ * evaluator's is, its sign and payload free (with two NaN operands x86 keeps the first, and
+ * a batch may order them otherwise: test_eval_grad_batch.c). */
 #ifndef ISM_EVAL_H
 #define ISM_EVAL_H
 

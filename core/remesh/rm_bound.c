@@ -221,8 +221,8 @@ static size_t fan_points(const rm_pass *p, uint32_t v, const double *x, double (
 }
 
 /* The first steps of the fan's points q[0..n) that the memo does not know, taken in one
- * batch (ism_eval_gradient_batch: bit for bit ism_eval_gradient's values, one pass over the
- * tape for all of them) and kept in the memo, where rm_bound_fan_worst's measures find
+ * batch (ism_eval_gradient_batch: bit for bit ism_eval_gradient's values, a NaN's sign
+ * aside, which first_step_from's tests ignore; one pass over the tape for all of them) and kept in the memo, where rm_bound_fan_worst's measures find
  * them: the same measures at a third of the cost. A fan's check almost always measures
  * every point (chmutov-quartic, own box: 8 in 1,000 relaxation checks stop early), so
  * taking all first steps at once spares more than the points a stop leaves unmeasured

@@ -65,7 +65,8 @@ bool rm_normals(rm_pass *p)
         return false;
     size_t n = 0;
     /* ∇f at every vertex, a chunk of the batched evaluator at a time (bit for bit
-       ism_eval_gradient's, at under half the instructions a point on chmutov-quartic) */
+       ism_eval_gradient's, a NaN's sign aside (eval.h): a NaN gradient's vertex is no
+       normal's either way; at under half the instructions a point on chmutov-quartic) */
     for (size_t v0 = 0; v0 < nv; v0 += ISM_GRAD_BATCH) {
         size_t c = nv - v0 < ISM_GRAD_BATCH ? nv - v0 : ISM_GRAD_BATCH;
         double x[ISM_GRAD_BATCH], y[ISM_GRAD_BATCH], z[ISM_GRAD_BATCH], fv[ISM_GRAD_BATCH];
