@@ -43,7 +43,7 @@ static rm_memo_entry *slot_of(const rm_memo *m, const double x[3])
     return &m->e[(h * 0xd6e8feb86659fd93ull) >> (64 - m->bits)];
 }
 
-rm_memo_entry *rm_memo_peek(rm_memo *m, const double x[3])
+rm_memo_entry *rm_memo_peek(const rm_memo *m, const double x[3])
 {
     return slot_of(m, x);
 }

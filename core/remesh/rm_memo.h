@@ -42,12 +42,16 @@ rm_memo_entry *rm_memo_slot(rm_memo *m, const double x[3]);
 
 /* x's slot, whatever it holds; nothing changes (a caller asking of one point more than once
  * finds its slot once). */
-rm_memo_entry *rm_memo_peek(rm_memo *m, const double x[3]);
+rm_memo_entry *rm_memo_peek(const rm_memo *m, const double x[3]);
 
 /* True when slot e (x's, rm_memo_peek) knows x: its entry is x's and not empty. */
 bool rm_memo_holds(const rm_memo_entry *e, const double x[3]);
 
-/* x's slot e as rm_memo_slot leaves it: kept when it holds x, else emptied and keyed on x. */
+/* x's slot e as rm_memo_slot leaves it: kept when it holds x, else emptied and keyed on x.
+ * e must be rm_memo_peek's answer for this very x (unchecked: checking would hash x again,
+ * which is what peeking once spares): given another point's slot, x would be keyed where no
+ * lookup of x looks, and a pointer kept to e would read x's measures from a slot that is
+ * not x's. */
 rm_memo_entry *rm_memo_claim(rm_memo_entry *e, const double x[3]);
 
 #endif
