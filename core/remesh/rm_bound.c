@@ -16,19 +16,16 @@
  * a midpoint each); a larger fan's last points are measured one by one. */
 #define RM_FAN_BATCH (2 * ISM_GRAD_BATCH)
 /* The batch pays where an evaluation costs more than its bookkeeping: a tape this long or
- * longer. callgrind, --quality good, default bound, pass instructions with the batch for
- * every tape: chmutov-quartic -3.3%, tanglecube -4%, blob-pair -3%, spindle-cyclide -2%,
- * catenoid -0.4%, but cube +3-5%, ding-dong +3.6%, helicoid +5.3% (tapes of a few
- * instructions, where one evaluation costs about what the batch's bookkeeping does). Since
- * the batch computes powers and exp in its lanes and each point's memo slot is found once
- * (point_measure), 7 instead of 12, own box, ism_quality_pass: ding-dong (7 instructions)
- * 47.96M -> 46.66M, ellipsoid (8) 8.93M -> 8.71M, steinmetz (9) 252.5M -> 242.9M, torus
- * (10) 46.86M -> 44.62M, catenoid (10) 66.80M -> 64.43M, pretzel-genus2 (11) 33.41M ->
- * 31.66M, steiner-roman (11) 389.6M -> 357.6M, cayley-cubic (11) 132.5M -> 124.6M,
- * isolated-point (11) 17.84M -> 16.95M, tooth (11) 151.3M -> 139.8M, clebsch-cubic (11)
- * 79.52M -> 76.47M (10 at the time; the 7-9 ones at 7); every PLY byte-identical. Shorter
- * tapes (cube, helicoid, sphere: 6) not measured again. */
-#define RM_FAN_BATCH_MIN_TAPE 7
+ * longer. Measured with the batch for every tape (threshold 1) against without it below 7,
+ * callgrind --threads 1 --quality good, own box, ism_quality_pass instructions (s24, the
+ * batch computing powers and exp in its lanes, each point's memo slot found once): tapes of
+ * 6 gain, cube -0.87% (327.14M -> 324.28M), sphere -0.57% (6.70M -> 6.66M),
+ * x^2+y^2-z^2-0.1 -0.84% (41.10M -> 40.75M), helicoid +0.06% (39.25M -> 39.27M); shorter
+ * ones lose, x^2+y^2+z-0.5 (5) +0.15%, x^2+y^2-0.49 (4) +0.82%, x*x+y-z (3) +1.17%: one
+ * evaluation there costs about what a lane's bookkeeping does. Tapes of 7 to 11 measured
+ * with 7 against 12 (s23, 819d8fa): ding-dong (7) -2.7%, ellipsoid (8) -2.5%, steinmetz
+ * (9) -3.8%, torus (10) -4.8%, steiner-roman (11) -8.2%. Every PLY byte-identical. */
+#define RM_FAN_BATCH_MIN_TAPE 6
 
 /* e's first step from f's value fv and gradient e->g at x (first_step evaluates them;
  * fan_first_steps takes them from a batch). */
