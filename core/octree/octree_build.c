@@ -71,6 +71,7 @@ typedef struct thread_state {
     uint64_t visited, excluded, unresolved;
     uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
     uint64_t tape_misses;     /* leaves whose shortened tape found no room in leaf_tapes */
+    uint64_t copied;          /* nodes copy_subtree wrote */
     size_t new_nodes;         /* made since the last batch went to build.nodes_total */
 } thread_state;
 
@@ -746,6 +747,7 @@ static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int3
         vec_put(v, &c, tape);
     }
     th->visited += n;
+    th->copied += n;
     if ((th->new_nodes += 8 * splits) >= NODE_BATCH && !count_nodes(b, th))
         return false;
     return true;
@@ -1010,6 +1012,7 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
         st->thin_boxes += th->thin.n_boxes;
         st->deep_leaves += th->deep_leaves;
         st->tape_misses += th->tape_misses;
+        st->copied += th->copied;
         ism_thin_ws_free(&th->thin);
         st->n_point += th->s.n_point;
         st->n_gradient += th->s.n_gradient;

@@ -123,6 +123,8 @@ typedef struct ism_octree_build_stats {
     uint64_t deep_leaves;    /* leaves below max_depth (under hidden pieces) */
     uint64_t tape_misses;    /* leaves (in this build) whose shortened tape found no room in
                                 the tree's table (octree.h's limits): they evaluate f */
+    uint64_t copied;         /* nodes copied whole from previous (a subtree no force_split
+                                key reaches): counted in visited too */
     uint64_t n_point, n_gradient, n_interval;
 } ism_octree_build_stats;
 

@@ -9,6 +9,7 @@
 #include <criterion/criterion.h>
 #include <string.h>
 #include "core/expr/tape.h"
+#include "core/octree/node_balls.h"
 #include "core/octree/octree_build.h"
 #include "poly_fixture.h"
 
@@ -33,6 +34,11 @@ static const pf_surface thin_torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(
                                       thin_rr, 2, NULL, 0};
 #define THIN_LEVELS 3 /* the polygoniser's ISM_THIN_BLIND_DEPTH: no quiet balls */
 
+/* Balls round certified nodes (ism_octree_build_params.node_balls) for build(): none unless a
+ * test sets them. */
+static const double (*node_balls)[ISM_NODE_BALL_FIELDS];
+static size_t nnode_balls;
+
 static void build(const ism_tape *t, double shift, int thin_depth, int threads,
                   const ism_split_set *split, const ism_octree *previous, ism_octree *tree,
                   ism_octree_build_stats *st)
@@ -56,17 +62,21 @@ static void build(const ism_tape *t, double shift, int thin_depth, int threads,
         .max_nodes = (size_t)1 << 26,
         .force_split = split,
         .previous = previous,
+        .node_balls = node_balls,
+        .nnode_balls = nnode_balls,
     };
     cr_assert_eq(ism_octree_build(tree, &p, st), ISM_BUILD_OK);
 }
 
-/* Every stride-th leaf above the maximum depth, from the offset-th on, into s. */
-static void add_leaves(const ism_octree *tree, size_t offset, size_t stride, ism_split_set *s)
+/* Every stride-th leaf above the maximum depth (at or below it when deep), from the
+ * offset-th on, into s. */
+static void add_leaves(const ism_octree *tree, size_t offset, size_t stride, bool deep,
+                       ism_split_set *s)
 {
     size_t seen = 0;
     for (size_t i = 0; i < tree->n; i++) {
         const ism_node *nd = &tree->nodes[i];
-        if (nd->state != ISM_NODE_LEAF || nd->level >= MAX_DEPTH)
+        if (nd->state != ISM_NODE_LEAF || (nd->level >= MAX_DEPTH) != deep)
             continue;
         if (seen++ % stride == offset)
             cr_assert(ism_split_set_add(s, ism_node_key(nd)));
@@ -114,11 +124,14 @@ static void check(const pf_surface *s, const run_case *cases, size_t ncases, boo
         ism_octree_build_stats s1, sf, sr;
         ism_split_set split = {0};
         build(t, shift, thin, threads, NULL, NULL, &first, &s1);
-        add_leaves(&first, 0, 7, &split);
+        add_leaves(&first, 0, 7, false, &split);
         ism_octree second;
         ism_octree_build_stats s2;
         build(t, shift, thin, threads, &split, &first, &second, &s2);
-        add_leaves(&second, 3, 5, &split); /* a third round's larger set */
+        add_leaves(&second, 3, 5, false, &split); /* a third round's larger set */
+        /* keys at or below depth.max force nothing, yet mark their descent: the subtrees
+         * they alone reach are walked, not copied, and must come out the same */
+        add_leaves(&second, 1, 13, true, &split);
         build(t, shift, thin, threads, &split, NULL, &fresh, &sf);
         build(t, shift, thin, threads, &split, &second, &reused, &sr);
         same_tree(&fresh, &reused, s->expr);
@@ -131,6 +144,16 @@ static void check(const pf_surface *s, const run_case *cases, size_t ncases, boo
         cr_expect_eq(sf.thin_undecided, sr.thin_undecided);
         if (pieces)
             cr_expect_gt(sf.thin_found, 0, "shift %g: no hidden piece found", shift);
+        /* the copy ran (some subtree no key reaches), yet not everywhere (the forced paths
+         * were walked); none with node balls (they may force any leaf) or without a tree */
+        cr_expect_eq(sf.copied, 0);
+        if (nnode_balls) {
+            cr_expect_eq(sr.copied, 0, "shift %g: %llu nodes copied beside node balls", shift,
+                         (unsigned long long)sr.copied);
+        } else {
+            cr_expect_gt(sr.copied, 0, "shift %g: nothing copied", shift);
+            cr_expect_lt(sr.copied, sr.visited, "shift %g: every node copied", shift);
+        }
         /* far less: at most REUSE_GRADIENTS of the fresh build's gradients */
         cr_expect_lt((double)sr.n_gradient, REUSE_GRADIENTS * (double)sf.n_gradient,
                      "shift %g: %llu gradients of %llu",
@@ -164,4 +187,23 @@ Test(octree_reuse, thin_torus_tree_as_a_fresh_build)
     static const run_case cases[] = {{0, 1, THIN_LEVELS}, {1e-3, 2, THIN_LEVELS},
                                      {PF_IRR, 1, THIN_LEVELS}};
     check(&thin_torus, cases, sizeof cases / sizeof cases[0], true);
+}
+
+/* With node balls (a round after certified nodes asked for finer cells) a ball may force a
+ * leaf in a subtree no key reaches: every node is grown, none copied, and the tree is still
+ * a fresh build's. Two balls on the torus's tube asking for depth-6 cells. */
+Test(octree_reuse, torus_with_node_balls_grows_every_node)
+{
+    double cell = 3.0 / (1 << 6);
+    static double balls[2][ISM_NODE_BALL_FIELDS];
+    double b0[ISM_NODE_BALL_FIELDS] = {1.3, 0, 0, 0.1, cell};
+    double b1[ISM_NODE_BALL_FIELDS] = {0, -0.7, 0, 0.15, cell};
+    memcpy(balls[0], b0, sizeof b0);
+    memcpy(balls[1], b1, sizeof b1);
+    node_balls = (const double (*)[ISM_NODE_BALL_FIELDS])balls;
+    nnode_balls = 2;
+    static const run_case cases[] = {{0, 1, 0}, {PF_IRR, 2, 0}};
+    check(&torus, cases, sizeof cases / sizeof cases[0], false);
+    node_balls = NULL;
+    nnode_balls = 0;
 }
