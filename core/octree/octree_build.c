@@ -29,7 +29,8 @@
 #define TOP_LEVEL 2
 /* A thread adds its new nodes to the shared count (the max_nodes budget) in batches this
  * large: one shared write per 512 splits instead of one per split, at the price of
- * exceeding the budget by at most this many nodes per thread before the build stops. */
+ * exceeding the budget by at most this many nodes per thread before the build stops. A
+ * subtree copied whole (copy_subtree) is counted at once, before it is allocated. */
 #define NODE_BATCH 4096
 
 typedef struct node_vec {
@@ -717,6 +718,8 @@ static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int3
 {
     const ism_octree *t = b->previous;
     size_t from = (size_t)t->nodes[pi].child, end = subtree_end(t, pi), n = end - from;
+    if ((th->new_nodes += n) >= NODE_BATCH && !count_nodes(b, th))
+        return false;
     if (!vec_reserve(b, v, n))
         return fail(b, ISM_BUILD_NO_MEMORY);
     int32_t shift = (int32_t)v->n - (int32_t)from;
@@ -724,7 +727,6 @@ static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int3
     v->v[i].child = (int32_t)v->n;
     v->v[i].thin = t->nodes[pi].thin;
     count_thin(th, t->nodes[pi].thin);
-    size_t splits = 1;
     for (size_t j = from; j < end; j++) {
         const ism_node *q = &t->nodes[j];
         ism_node c = {{q->org[0], q->org[1], q->org[2]}, -1, q->level, q->state, 0, 0};
@@ -733,7 +735,6 @@ static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int3
             c.child = q->child + shift;
             c.thin = q->thin;
             count_thin(th, q->thin);
-            splits++;
         } else if (q->state == ISM_NODE_LEAF) {
             c.flags = q->flags;
             c.thin = q->thin;
@@ -748,8 +749,6 @@ static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int3
     }
     th->visited += n;
     th->copied += n;
-    if ((th->new_nodes += 8 * splits) >= NODE_BATCH && !count_nodes(b, th))
-        return false;
     return true;
 }
 
