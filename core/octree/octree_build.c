@@ -83,7 +83,7 @@ typedef struct build {
     ism_node_balls node_balls;   /* index of p->node_balls */
     const ism_octree *previous;  /* p->previous when it may be used, else NULL */
     uint8_t *forced_below;       /* per node of previous: 1 when a force_split key's descent
-                                    passes it (subtree_copy); NULL: no subtree copied */
+                                    passes it (copy_subtree); NULL: no subtree copied */
     thread_state *threads;
     ism_point_entry *corner_memos; /* the threads' memos, end to end (thread_state.corners) */
     ism_root_entry *root_memos;    /* ... and thread_state.memo's */
