@@ -753,9 +753,10 @@ static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int3
 }
 
 /* The tape of a node split in the last round, asked for only when a node below it is decided
- * afresh: a subtree the new round does not force anywhere is taken over node by node and
- * evaluates nothing, yet its split nodes shortened their tapes again (Barth's sextic at
- * E 1e-2: 17M of each later round's ~65M octree). `tape` is the node's once resolved (NULL
+ * afresh: the walk reaches only the subtrees on a forced path (the others are copied whole,
+ * copy_subtree), or all of them when there are node balls, and a reached subtree may still
+ * be taken over node by node and evaluate nothing, yet its split nodes shortened their
+ * tapes again (Barth's sextic at E 1e-2: 17M of each later round's ~65M octree). `tape` is the node's once resolved (NULL
  * before); its parent's is `above` when that is itself pending, else `parent`. node_range
  * writes th->tapes[level] as it would have when the node was reached: the levels below a
  * pending node are written only inside its subtree, so a resolved tape stays valid for
