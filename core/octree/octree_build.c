@@ -655,16 +655,10 @@ static bool visible_feature(const build *b, thread_state *th, const ism_tape *su
            !beside_locus(b, lo, hi);
 }
 
-/* Later rounds re-grow the last round's tree node by node, though below a split node whose
- * subtree holds no forced leaf nothing is decided afresh (take_over keeps every leaf and
- * empty node, and split nodes split again): Barth's sextic at E 0.0259 walked ~28M
- * instructions of octree in each of its 5 later rounds to change a few dozen nodes. Such a
- * subtree is copied whole instead, with the nodes, flags, verdicts, tape numbers and counters
- * the walk gives. A grown subtree lies in one run of nodes after its root's children (grow
- * appends a node's 8 children, then grows each in turn), so the copy is a run with its child
- * indices moved. forced_below marks the nodes on the descent to each key of force_split
- * (a superset of the ancestors of the leaves forced now); none is computed, and no subtree
- * copied, when node balls may force a leaf (near_node). */
+/* The nodes of the last round's tree that a subtree copy must not skip (copy_subtree): 1 on
+ * the descent to each key of force_split (a superset of the ancestors of the leaves forced
+ * now). None is computed, and no subtree copied, when node balls may force a leaf
+ * (near_node). */
 static uint8_t *mark_forced(const ism_octree *t, const ism_split_set *set)
 {
     uint8_t *mark = calloc(t->n, 1);
@@ -696,7 +690,8 @@ static uint8_t *mark_forced(const ism_octree *t, const ism_split_set *set)
 }
 
 /* One past the last node of split node i's subtree in tree t: the children of its last split
- * node in grow's order (the last split child's, recursively) are appended last. */
+ * node in grow's order (the last split child's, recursively) are appended last. Relies on
+ * the subtree being one run (copy_subtree's comment). */
 static size_t subtree_end(const ism_octree *t, int32_t i)
 {
     for (;;) {
@@ -713,7 +708,14 @@ static size_t subtree_end(const ism_octree *t, int32_t i)
 /* Node v->v[i], split in the last round as node pi with no forced leaf below, and its
  * subtree copied from the last round's tree: what grow makes of them node by node (split
  * nodes keep their verdicts, leaves their flags, verdicts and tapes: take_over), counted
- * as it counts them. Its root is visited already. */
+ * as it counts them. Its root is visited already.
+ * Why: later rounds re-grew the last round's tree node by node, though below such a node
+ * nothing is decided afresh (take_over keeps every leaf and empty node, and split nodes
+ * split again): Barth's sextic at E 0.0259 walked ~28M instructions of octree in each of
+ * its 5 later rounds to change a few dozen nodes. A grown subtree lies in one run of nodes
+ * after its root's children (grow appends a node's 8 children, then grows each in turn,
+ * and join_tasks keeps each task's run in one piece), so the copy is a run with its child
+ * indices moved. */
 static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int32_t pi)
 {
     const ism_octree *t = b->previous;
@@ -1063,7 +1065,8 @@ static void join_task(void *ctx, size_t k, int thread)
 }
 
 /* Appends every task's subtree to the top array, in task order, fixing child indices: the
- * places from a prefix sum, the copies on the build's threads (one task per subtree). */
+ * places from a prefix sum, the copies on the build's threads (one task per subtree). Each
+ * task's run stays in one piece: the next round's subtree_end and copy_subtree rely on it. */
 static bool join_tasks(build *b, node_vec *top, int nthreads)
 {
     size_t *at = malloc((b->ntasks ? b->ntasks : 1) * sizeof *at), n = top->n;
