@@ -5,18 +5,23 @@
 
 #include <stdlib.h>
 
+/* The child of split node i (which contains o) that contains o. */
+static int32_t child_toward(const ism_octree *t, int32_t i, const int32_t o[3])
+{
+    const ism_node *nd = &t->nodes[i];
+    int32_t half = ism_grid_cell_steps(&t->grid, nd->level + 1);
+    int k = 0;
+    for (int a = 0; a < 3; a++)
+        if (o[a] - nd->org[a] >= half)
+            k |= 1 << a;
+    return nd->child + k;
+}
+
 /* Down from node i (which contains o) as ism_octree_find goes down from the root. */
 static int32_t descend(const ism_octree *t, int32_t i, const int32_t o[3], int level)
 {
-    while (t->nodes[i].level < level && t->nodes[i].child >= 0) {
-        const ism_node *nd = &t->nodes[i];
-        int32_t half = ism_grid_cell_steps(&t->grid, nd->level + 1);
-        int k = 0;
-        for (int a = 0; a < 3; a++)
-            if (o[a] - nd->org[a] >= half)
-                k |= 1 << a;
-        i = nd->child + k;
-    }
+    while (t->nodes[i].level < level && t->nodes[i].child >= 0)
+        i = child_toward(t, i, o);
     return i;
 }
 
@@ -32,6 +37,19 @@ static bool inside_root(const ism_octree *t, const int32_t o[3])
 int32_t ism_octree_find(const ism_octree *t, const int32_t o[3], int level)
 {
     return inside_root(t, o) ? descend(t, 0, o, level) : -1;
+}
+
+int ism_octree_path(const ism_octree *t, const int32_t o[3], int level,
+                    int32_t path[ISM_GRID_MAX_DEPTH + 1])
+{
+    if (!inside_root(t, o))
+        return 0;
+    int n = 0;
+    int32_t i = 0;
+    path[n++] = i;
+    while (t->nodes[i].level < level && t->nodes[i].child >= 0)
+        path[n++] = i = child_toward(t, i, o);
+    return n;
 }
 
 int32_t *ism_octree_parents(const ism_octree *t)

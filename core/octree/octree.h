@@ -111,6 +111,11 @@ static inline void ism_child_origin(const ism_grid *g, const ism_node *nd, int k
  * at that level; -1 when o is outside the root. */
 int32_t ism_octree_find(const ism_octree *t, const int32_t o[3], int level);
 
+/* The nodes ism_octree_find passes, the root first and the node it answers last, into path;
+ * their number (0 when o is outside the root). */
+int ism_octree_path(const ism_octree *t, const int32_t o[3], int level,
+                    int32_t path[ISM_GRID_MAX_DEPTH + 1]);
+
 /* Every node's parent (-1 for the root), for ism_octree_face_tiles; malloc'ed (NULL when
  * out of memory). */
 int32_t *ism_octree_parents(const ism_octree *t);

@@ -663,28 +663,10 @@ static uint8_t *mark_forced(const ism_octree *t, const ism_split_set *set)
 {
     uint8_t *mark = calloc(t->n, 1);
     for (size_t k = 0; mark && set && k < set->n; k++) {
-        uint64_t key = set->keys[k];
-        int level = (int)(key >> 57);
-        int32_t o[3] = {(int32_t)(key >> 38 & 0x7ffff), (int32_t)(key >> 19 & 0x7ffff),
-                        (int32_t)(key & 0x7ffff)};
-        int32_t i = 0;
-        for (;;) {
-            const ism_node *nd = &t->nodes[i];
-            mark[i] = 1;
-            if (nd->state != ISM_NODE_SPLIT || nd->level >= level)
-                break;
-            int32_t half = ism_grid_cell_steps(&t->grid, nd->level + 1), c = 0;
-            for (int a = 0; a < 3; a++) {
-                int32_t d = o[a] - nd->org[a];
-                if (d < 0 || d >= 2 * half)
-                    c = -1; /* outside the tree: forces nothing */
-                else if (c >= 0 && d >= half)
-                    c |= 1 << a;
-            }
-            if (c < 0)
-                break;
-            i = nd->child + c;
-        }
+        int32_t o[3], path[ISM_GRID_MAX_DEPTH + 1];
+        int level = ism_node_key_decode(set->keys[k], o);
+        for (int n = ism_octree_path(t, o, level, path), j = 0; j < n; j++)
+            mark[path[j]] = 1;
     }
     return mark;
 }

@@ -99,6 +99,14 @@ uint64_t ism_node_key(const ism_node *nd)
            (uint64_t)(uint32_t)nd->org[1] << 19 | (uint64_t)(uint32_t)nd->org[2];
 }
 
+int ism_node_key_decode(uint64_t key, int32_t org[3])
+{
+    org[0] = (int32_t)(key >> 38 & 0x7ffff);
+    org[1] = (int32_t)(key >> 19 & 0x7ffff);
+    org[2] = (int32_t)(key & 0x7ffff);
+    return (int)(key >> 57);
+}
+
 bool ism_split_set_add(ism_split_set *s, uint64_t key)
 {
     if (!ism_grow((void **)&s->keys, &s->cap, s->n + 1, sizeof *s->keys, 64))

@@ -27,6 +27,8 @@ double ism_emitted_error_kept(ism_sampler *s, const ism_cell_out *out, size_t fi
 
 /* A node's identity across rounds (its level and lattice origin). */
 uint64_t ism_node_key(const ism_node *nd);
+/* The key's node: its lattice origin into org, its level returned. */
+int ism_node_key_decode(uint64_t key, int32_t org[3]);
 
 /* Nodes to split whatever the flatness test says: keys sorted ascending. */
 typedef struct ism_split_set {

@@ -207,3 +207,34 @@ Test(octree_reuse, torus_with_node_balls_grows_every_node)
     node_balls = NULL;
     nnode_balls = 0;
 }
+
+/* The forced marks' two parts (octree_build.c's mark_forced): a node key decodes to the node's
+ * level and origin, and the path to a node's origin at its level runs root to node, each a
+ * child of the one before, ending where ism_octree_find answers. Every node of the torus's
+ * tree, box off the lattice. */
+Test(octree_reuse, node_key_decodes_and_path_descends)
+{
+    ism_tape *t = pf_compile(&torus);
+    ism_octree tree;
+    ism_octree_build_stats st;
+    build(t, PF_IRR * 3.0 / (1 << MAX_DEPTH), MAX_DEPTH, 1, NULL, NULL, &tree, &st);
+    for (size_t i = 0; i < tree.n; i++) {
+        const ism_node *nd = &tree.nodes[i];
+        int32_t o[3], path[ISM_GRID_MAX_DEPTH + 1];
+        int level = ism_node_key_decode(ism_node_key(nd), o);
+        cr_assert(level == nd->level && memcmp(o, nd->org, sizeof o) == 0, "node %zu", i);
+        int n = ism_octree_path(&tree, o, level, path);
+        cr_assert_eq(n, level + 1, "node %zu: path of %d", i, n);
+        cr_assert_eq(path[0], 0);
+        cr_assert_eq(path[n - 1], (int32_t)i);
+        cr_assert_eq(path[n - 1], ism_octree_find(&tree, o, level));
+        for (int j = 1; j < n; j++) {
+            int32_t c = tree.nodes[path[j - 1]].child;
+            cr_assert(c >= 0 && path[j] >= c && path[j] < c + 8, "node %zu step %d", i, j);
+        }
+    }
+    int32_t outside[3] = {-1, 0, 0}, path[ISM_GRID_MAX_DEPTH + 1];
+    cr_assert_eq(ism_octree_path(&tree, outside, MAX_DEPTH, path), 0);
+    ism_octree_free(&tree);
+    ism_tape_free(t);
+}
