@@ -37,8 +37,12 @@ bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_
 
 /* Room in out for the outputs of leaves reuse[0..n) (as ism_leaf_memo_match gives them),
  * taken at once: the copied ones' (reuse[i] >= 0) and, for each leaf polygonised afresh,
- * the most a copied one emitted (the leaves a later round polygonises are those beside the
- * split ones, of their neighbours' sizes). A later round copies most of a chunk's leaves,
+ * the most a copied one emitted. That overestimates: Barth's sextic at E 0.0259 (84 chunks
+ * over its later rounds) ends with room for 2.24× the vertices and 2.28× the triangles its
+ * chunks hold; the copied leaves' mean instead gives 1.71× and 1.42× but costs 5.3M instructions
+ * more (2,247.0M against 2,241.8M, callgrind --toggle-collect=ism_mesh_surface, bench_error
+ * mesh barth-sextic 0.0259 10), the fresh leaves then growing out. The room stays alive through
+ * the next round (the arrays become its memo). A later round copies most of a chunk's leaves,
  * and growing out leaf by leaf reallocated it about log2 of its size times (Barth's sextic
  * at E 0.0259: 29M of its 2,358M instructions moving the arrays over 5 later rounds,
  * callgrind counting each byte `rep movsb` moves). False when out of memory. */
