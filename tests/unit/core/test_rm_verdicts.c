@@ -47,6 +47,17 @@ static void found_with_sliver(const ism_mesh *m, found *f, bool reversed)
     f->ntris = m->ntris + 1;
 }
 
+/* The unit sphere t polygonised on one thread at depths 3..DEPTH in sweep box `which`
+ * (pf_sweep_box: -1 the box as given, 0 moved by 1e-3, 1 by an irrational fraction of a
+ * cell), into m. */
+static void sphere_in_box(const ism_tape *t, int which, ism_mesh *m)
+{
+    double box[6];
+    ism_poly_stats st;
+    pf_sweep_box(BOX, DEPTH, which, box);
+    pf_run(t, box, 3, DEPTH, 1, m, &st);
+}
+
 /* A pass over m under the bound e (0: none) with its bounds measured on fd. */
 static void open_pass(rm_pass *p, ism_mesh *m, const ism_tape *t, double e, const found *fd)
 {
@@ -65,11 +76,8 @@ Test(rm_verdicts, merge_distances_do_not_depend_on_what_was_asked_before)
 {
     ism_tape *t = pf_compile(&pf_unit_sphere);
     for (int which = pf_first_box() - 1; which < 2; which++) {
-        double box[6];
         ism_mesh m;
-        ism_poly_stats st;
-        pf_sweep_box(BOX, DEPTH, which, box);
-        pf_run(t, box, 3, DEPTH, 1, &m, &st);
+        sphere_in_box(t, which, &m);
         found fd;
         found_with_sliver(&m, &fd, false);
         /* b has the found mesh's farthest midpoint measured (as an earlier merge off the
@@ -136,11 +144,8 @@ Test(rm_verdicts, the_midpoint_scan_stopped_at_the_bound_keeps_every_verdict)
 {
     ism_tape *t = pf_compile(&pf_unit_sphere);
     for (int which = pf_first_box() - 1; which < 2; which++) {
-        double box[6];
         ism_mesh m;
-        ism_poly_stats st;
-        pf_sweep_box(BOX, DEPTH, which, box);
-        pf_run(t, box, 3, DEPTH, 1, &m, &st);
+        sphere_in_box(t, which, &m);
         /* as polygonised, and with the sliver last: its midpoint the farthest, after all;
            and the sliver reversed (its chord an open mesh's boundary edge b -> a, b > a) */
         found as_is = {m.pos, m.tri, m.ntris}, sliver, reversed;
