@@ -191,7 +191,7 @@ Test(octree_reuse, thin_torus_tree_as_a_fresh_build)
 
 /* With node balls (a round after certified nodes asked for finer cells) a ball may force a
  * leaf in a subtree no key reaches: every node is grown, none copied, and the tree is still
- * a fresh build's. Two balls on the torus's tube asking for depth-6 cells. */
+ * a fresh build's. Two balls on the torus's tube asking for depth-6 cells, in the three placements. */
 Test(octree_reuse, torus_with_node_balls_grows_every_node)
 {
     double cell = 3.0 / (1 << 6);
@@ -202,7 +202,7 @@ Test(octree_reuse, torus_with_node_balls_grows_every_node)
     memcpy(balls[1], b1, sizeof b1);
     node_balls = (const double (*)[ISM_NODE_BALL_FIELDS])balls;
     nnode_balls = 2;
-    static const run_case cases[] = {{0, 1, 0}, {PF_IRR, 2, 0}};
+    static const run_case cases[] = {{0, 1, 0}, {1e-3, 2, 0}, {PF_IRR, 2, 0}};
     check(&torus, cases, sizeof cases / sizeof cases[0], false);
     node_balls = NULL;
     nnode_balls = 0;
