@@ -63,13 +63,20 @@ static void observe(ismd_histogram *h, const double *bounds, size_t nb, double s
     atomic_fetch_add_explicit(&h->sum_us, us > 0 ? (unsigned long long)us : 0, memory_order_relaxed);
 }
 
-void ismd_metrics_request(ismd_metrics *m, ismd_route r, unsigned status, double seconds,
-                          size_t bytes)
+static ismd_route known_route(ismd_route r)
 {
-    if (r >= ISMD_R_COUNT)
-        r = ISMD_R_OTHER;
-    atomic_fetch_add_explicit(&m->requests[r][status_slot(status)], 1, memory_order_relaxed);
-    observe(&m->latency[r], LAT_BOUNDS, ISMD_LAT_BUCKETS - 1, seconds);
+    return r < ISMD_R_COUNT ? r : ISMD_R_OTHER;
+}
+
+void ismd_metrics_count(ismd_metrics *m, ismd_route r, unsigned status)
+{
+    atomic_fetch_add_explicit(&m->requests[known_route(r)][status_slot(status)], 1,
+                              memory_order_relaxed);
+}
+
+void ismd_metrics_served(ismd_metrics *m, ismd_route r, double seconds, size_t bytes)
+{
+    observe(&m->latency[known_route(r)], LAT_BOUNDS, ISMD_LAT_BUCKETS - 1, seconds);
     atomic_fetch_add_explicit(&m->response_bytes, bytes, memory_order_relaxed);
 }
 
@@ -230,7 +237,7 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
         return NULL;
     o.s[0] = 0;
 
-    header(&o, "isomesh_http_requests_total", "counter", "HTTP requests by route and status.");
+    header(&o, "isomesh_http_requests_total", "counter", "HTTP requests by route and status (counted when answered).");
     for (int r = 0; r < ISMD_R_COUNT; r++)
         for (int s = 0; s < ISMD_NSTATUS; s++) {
             unsigned long long v = ld(&m->requests[r][s]);

@@ -88,8 +88,14 @@ typedef struct ismd_metrics {
 } ismd_metrics;
 
 void ismd_metrics_init(ismd_metrics *m);
-void ismd_metrics_request(ismd_metrics *m, ismd_route r, unsigned status, double seconds,
-                          size_t bytes);
+/* Counts a request of route r answered with status (requests_total): called when the answer
+ * is queued, before its bytes leave, so a client that has read an answer always finds it
+ * counted (libmicrohttpd's completion callback runs after the last byte left, and another
+ * polling thread can serve the client's next request, /metrics, before it). */
+void ismd_metrics_count(ismd_metrics *m, ismd_route r, unsigned status);
+/* Adds a finished request's duration (seconds, until its answer left or it was given up)
+ * and the body bytes it sent. */
+void ismd_metrics_served(ismd_metrics *m, ismd_route r, double seconds, size_t bytes);
 void ismd_metrics_polygonise(ismd_metrics *m, double seconds);
 
 /* Renders everything (and the cache tiers' counters) as Prometheus text into a malloc'd

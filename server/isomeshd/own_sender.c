@@ -184,7 +184,6 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_fr
                      1);
     r->route = ISMD_R_MESH_FILE;
     r->cache = "hit";
-    r->status = 200;
     r->bytes = r->r_body->len;
     snprintf(r->method, sizeof r->method, "GET");
     snprintf(r->path, sizeof r->path, "%.*s", (int)(sp - key + 11), key - 11);
@@ -216,6 +215,7 @@ bool ismd_own_answer(void *cls, const char *head, size_t len, void *conn, ism_fr
         r->r_body = NULL;
     }
     a->ctx = r;
+    ismd_request_answered(r, 200);
     /* open until done, as libmicrohttpd's requests: a stop lets the answers under way finish
      * (ismd_http_stop waits for them, bounded) */
     atomic_fetch_add(&s->open_requests, 1);

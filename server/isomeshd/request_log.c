@@ -1,5 +1,5 @@
-/* request_log.c — the end of a request (request_log.h): its line in the log and its count and
- * duration in the metrics, the same for libmicrohttpd's requests (http.c) and the own
+/* request_log.c — a request's metrics and log line (request_log.h): its count when its answer
+ * is queued, its duration, bytes and line in the log when it ends, the same for libmicrohttpd's requests (http.c) and the own
  * sender's (own_sender.c). */
 #include "server/isomeshd/request_log.h"
 
@@ -9,6 +9,15 @@
 #include "server/common/log.h"
 #include "server/isomeshd/metrics.h"
 
+void ismd_request_answered(ismd_req *r, unsigned status)
+{
+    r->status = status;
+    if (r->counted)
+        return;
+    r->counted = true;
+    ismd_metrics_count(&r->srv->metrics, r->route, status);
+}
+
 void ismd_request_record(ismd_req *r, bool completed, const char *cut)
 {
     ismd_server *s = r->srv;
@@ -17,7 +26,9 @@ void ismd_request_record(ismd_req *r, bool completed, const char *cut)
     unsigned status = r->status                          ? r->status
                       : cut && !strcmp(cut, "body_deadline") ? 408
                                                              : 499;
-    ismd_metrics_request(&s->metrics, r->route, status, secs, r->bytes);
+    if (!r->counted)
+        ismd_metrics_count(&s->metrics, r->route, status);
+    ismd_metrics_served(&s->metrics, r->route, secs, r->bytes);
     ism_log_field f[] = {
         ISM_LS("method", r->method),
         ISM_LS("path", r->path),

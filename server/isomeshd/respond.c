@@ -10,6 +10,7 @@
 #include "server/common/cache_disk.h"
 
 #include "server/isomeshd/errors.h"
+#include "server/isomeshd/request_log.h"
 
 static void free_blob_cb(void *cls)
 {
@@ -140,7 +141,7 @@ enum MHD_Result ismd_send(ismd_req *r, unsigned status, struct MHD_Response *res
     if (!resp)
         return MHD_NO;
     ismd_common_headers(r->srv->cfg, ismd_add_to_response, resp);
-    r->status = status;
+    ismd_request_answered(r, status);
     enum MHD_Result ok = MHD_queue_response(r->conn, status, resp);
     MHD_destroy_response(resp);
     return ok;

@@ -732,19 +732,22 @@ class ApiTest(unittest.TestCase):
     def test_metrics_format_and_content(self):
         self.d.post("/v1/mesh", SPHERE)
         self.d.get("/v1/nope")
-        # A request is counted when libmicrohttpd reports it completed (on_completed, http.c),
-        # after its answer left: another polling thread may serve /metrics first (CI's asan
-        # lane once read it without the 404). Read again, a bounded number of times.
-        for _ in range(100):
-            r = self.d.get("/metrics")
-            self.assertEqual(r.status, 200)
-            m = parse_metrics(r.body.decode())
-            if 'isomesh_http_requests_total{route="other",status="404"}' in m:
-                break
-            time.sleep(0.02)
+        # A request is counted when its answer is queued (ismd_request_answered), so both are
+        # counted before the client read their answers, whichever polling thread serves
+        # /metrics: read once.
+        r = self.d.get("/metrics")
+        self.assertEqual(r.status, 200)
+        m = parse_metrics(r.body.decode())
         self.assertTrue(r.header("Content-Type").startswith("text/plain; version=0.0.4"))
         self.assertGreaterEqual(m['isomesh_http_requests_total{route="/v1/mesh",status="200"}'], 1)
         self.assertGreaterEqual(m['isomesh_http_requests_total{route="other",status="404"}'], 1)
+        # A duration is observed when libmicrohttpd reports the answer gone (on_completed,
+        # http.c), which another polling thread can overtake: read again, boundedly.
+        for _ in range(100):
+            if m.get('isomesh_http_request_duration_seconds_count{route="/v1/mesh"}', 0) > 0:
+                break
+            time.sleep(0.02)
+            m = parse_metrics(self.d.get("/metrics").body.decode())
         self.assertGreater(m['isomesh_http_request_duration_seconds_count{route="/v1/mesh"}'], 0)
         self.assertEqual(m['isomesh_http_request_duration_seconds_bucket{le="+Inf",route="/v1/mesh"}'],
                          m['isomesh_http_request_duration_seconds_count{route="/v1/mesh"}'])
