@@ -93,8 +93,7 @@ struct ismd_req {
     double queue_ms, worker_ms, parse_ms;
     char timing[256];
     /* for the log line */
-    unsigned status;           /* the answer's (0: none yet) */
-    bool counted;              /* requests_total has it (ismd_request_answered) */
+    unsigned status;           /* the answer's (0: none yet; set once, and counted then) */
     size_t bytes;
     const char *cache;         /* "hit", "miss", NULL */
 };

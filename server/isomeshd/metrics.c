@@ -237,7 +237,8 @@ char *ismd_metrics_render(ismd_metrics *m, const ism_cache *cache, size_t *len)
         return NULL;
     o.s[0] = 0;
 
-    header(&o, "isomesh_http_requests_total", "counter", "HTTP requests by route and status (counted when answered).");
+    header(&o, "isomesh_http_requests_total", "counter",
+           "HTTP requests by route and status (counted when answered).");
     for (int r = 0; r < ISMD_R_COUNT; r++)
         for (int s = 0; s < ISMD_NSTATUS; s++) {
             unsigned long long v = ld(&m->requests[r][s]);

@@ -91,7 +91,8 @@ void ismd_metrics_init(ismd_metrics *m);
 /* Counts a request of route r answered with status (requests_total): called when the answer
  * is queued, before its bytes leave, so a client that has read an answer always finds it
  * counted (libmicrohttpd's completion callback runs after the last byte left, and another
- * polling thread can serve the client's next request, /metrics, before it). */
+ * polling thread can serve the client's next request, /metrics, before it). A request never
+ * answered (408: its body came too slowly; 499: the client left) is counted when it ends. */
 void ismd_metrics_count(ismd_metrics *m, ismd_route r, unsigned status);
 /* Adds a finished request's duration (seconds, until its answer left or it was given up)
  * and the body bytes it sent. */

@@ -1,5 +1,5 @@
-/* request_log.c — a request's metrics and log line (request_log.h): its count when its answer
- * is queued, its duration, bytes and line in the log when it ends, the same for libmicrohttpd's requests (http.c) and the own
+/* request_log.c — a request's metrics and log line (request_log.h): its count when its
+ * answer is queued, its duration, bytes and line in the log when it ends, the same for libmicrohttpd's requests (http.c) and the own
  * sender's (own_sender.c). */
 #include "server/isomeshd/request_log.h"
 
@@ -11,10 +11,9 @@
 
 void ismd_request_answered(ismd_req *r, unsigned status)
 {
+    if (r->status)
+        return; /* answered already: the log line and the count keep the first status */
     r->status = status;
-    if (r->counted)
-        return;
-    r->counted = true;
     ismd_metrics_count(&r->srv->metrics, r->route, status);
 }
 
@@ -22,11 +21,12 @@ void ismd_request_record(ismd_req *r, bool completed, const char *cut)
 {
     ismd_server *s = r->srv;
     double secs = (ism_now_ns() - r->t0_ns) / 1e9;
+    bool answered = r->status != 0; /* counted then (ismd_request_answered) */
     /* no answer: the body came too slowly, or the client left */
     unsigned status = r->status                          ? r->status
                       : cut && !strcmp(cut, "body_deadline") ? 408
                                                              : 499;
-    if (!r->counted)
+    if (!answered)
         ismd_metrics_count(&s->metrics, r->route, status);
     ismd_metrics_served(&s->metrics, r->route, secs, r->bytes);
     ism_log_field f[] = {

@@ -742,12 +742,10 @@ class ApiTest(unittest.TestCase):
         self.assertGreaterEqual(m['isomesh_http_requests_total{route="/v1/mesh",status="200"}'], 1)
         self.assertGreaterEqual(m['isomesh_http_requests_total{route="other",status="404"}'], 1)
         # A duration is observed when libmicrohttpd reports the answer gone (on_completed,
-        # http.c), which another polling thread can overtake: read again, boundedly.
-        for _ in range(100):
-            if m.get('isomesh_http_request_duration_seconds_count{route="/v1/mesh"}', 0) > 0:
-                break
-            time.sleep(0.02)
-            m = parse_metrics(self.d.get("/metrics").body.decode())
+        # http.c), which another polling thread can overtake: await it, boundedly.
+        self.assertTrue(self.d.wait_metric("isomesh_http_request_duration_seconds_count", 1,
+                                           route="/v1/mesh"))
+        m = self.d.metrics()
         self.assertGreater(m['isomesh_http_request_duration_seconds_count{route="/v1/mesh"}'], 0)
         self.assertEqual(m['isomesh_http_request_duration_seconds_bucket{le="+Inf",route="/v1/mesh"}'],
                          m['isomesh_http_request_duration_seconds_count{route="/v1/mesh"}'])

@@ -219,16 +219,18 @@ class HttpConcurrencyTest(unittest.TestCase):
                     self.assertEqual(request(d.port, "GET", "/healthz", timeout=BOUND_S)[0], 200)
                     status, _, body = request(d.port, "GET", drc_path, timeout=BOUND_S)
                     self.assertEqual((status, body), (200, self.drc))
-                # the readers' answers are still being sent: none of theirs has ended. A
-                # duration is observed when an answer has left (requests are counted when
-                # answered), and the last .drc's end may trail its bytes: await the six, boundedly
+                # every reader's request is answered (counted when its answer is queued) but
+                # none has ended (a duration is observed when the answer has left): the
+                # route's 6 ends are the first .obj and the five .drc. Each .drc's log line
+                # follows its duration, and an end may trail its bytes: await their lines
                 route = "/v1/meshes/{key}.{format}"
-                for _ in range(250):
-                    ended = d.metric("isomesh_http_request_duration_seconds_count", route=route)
-                    if ended >= 6:
-                        break
-                    time.sleep(0.02)
-                self.assertEqual(ended, 6)
+                self.assertTrue(d.wait_metric("isomesh_http_requests_total", 6 + SLOW_READERS,
+                                              timeout=BOUND_S, route=route, status="200"))
+                self.assertEqual(d.metric("isomesh_http_requests_total", route=route,
+                                          status="200"), 6 + SLOW_READERS)
+                self.assertEqual(d.log_count("path=%s " % drc_path, 5, timeout=BOUND_S), 5)
+                self.assertEqual(d.metric("isomesh_http_request_duration_seconds_count",
+                                          route=route), 6)
                 for i, data in kept.items():
                     readers[i].settimeout(BOUND_S)  # blocking again, and a wider window:
                     readers[i].setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4 << 20)
