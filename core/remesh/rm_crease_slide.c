@@ -511,27 +511,36 @@ static bool merge_onto_crease(rm_pass *p, uint32_t v, uint32_t w, const crease_f
     return true;
 }
 
-/* v's neighbours closer than ISM_RM_CREASE_MERGE_REL × v's mean edge, nearest first, at
- * most ISM_RM_CREASE_MERGE_TRIES of them: the first that merges with v onto the crease
- * (merge_onto_crease). True when one did. */
+/* v's neighbours closer than ISM_RM_CREASE_MERGE_REL × v's mean edge (and not at v), not
+ * RM_PINNED, not a junction's vertex (rm_junction_vertex: it stays put), nearest first (in
+ * ring order among equals), at most ISM_RM_CREASE_MERGE_TRIES of them, none as near as one
+ * tried before: the first that merges with v onto the crease (merge_onto_crease). True when
+ * one did. The candidates are sorted once and rm_junction_vertex asked only of the one about
+ * to be tried (each try asked it of every candidate nearer than the best so far: cube, own
+ * box, 3,120 asks of 11.7M instructions). */
 static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan *f)
 {
     const rm_mesh *r = &p->r;
+    uint32_t near[ISM_RM_CREASE_SLIDE_MAX_DEGREE];
+    double dist[ISM_RM_CREASE_SLIDE_MAX_DEGREE], reach = ISM_RM_CREASE_MERGE_REL * f->mean_edge;
+    uint32_t n = 0;
+    for (uint32_t i = 0; i < c->n; i++) {
+        double d = rm_dist(rm_pos(p, v), rm_pos(p, c->ring[i]));
+        if (!(d < reach && d > 0) || r->locked[c->ring[i]] == RM_PINNED)
+            continue;
+        uint32_t j = n++;
+        for (; j > 0 && dist[j - 1] > d; j--) /* stable: equals keep ring order */
+            near[j] = near[j - 1], dist[j] = dist[j - 1];
+        near[j] = c->ring[i], dist[j] = d;
+    }
     double after = 0; /* the last one tried was this far */
-    for (int k = 0; k < ISM_RM_CREASE_MERGE_TRIES; k++) {
-        uint32_t w = UINT32_MAX;
-        double best = ISM_RM_CREASE_MERGE_REL * f->mean_edge;
-        for (uint32_t i = 0; i < c->n; i++) {
-            double d = rm_dist(rm_pos(p, v), rm_pos(p, c->ring[i]));
-            if (d < best && d > after && r->locked[c->ring[i]] != RM_PINNED &&
-                !rm_junction_vertex(p, c->ring[i])) /* a junction's vertex stays put */
-                best = d, w = c->ring[i];
-        }
-        if (w == UINT32_MAX)
-            return false;
-        if (merge_onto_crease(p, v, w, c, f))
+    for (uint32_t j = 0, tries = 0; j < n && tries < ISM_RM_CREASE_MERGE_TRIES; j++) {
+        if (!(dist[j] > after) || rm_junction_vertex(p, near[j]))
+            continue;
+        if (merge_onto_crease(p, v, near[j], c, f))
             return true;
-        after = best;
+        after = dist[j];
+        tries++;
     }
     return false;
 }
