@@ -10,11 +10,11 @@
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
-#include "core/singular/key_map.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* Largest bend between the two triangles of a flipped edge, before and after: a flip on a
  * quad bent more than this would move the surface the mesh describes (the polygoniser's
@@ -254,69 +254,157 @@ static uint8_t obtuse_corners(const rm_pass *p, size_t t)
     return bits;
 }
 
-/* The keys (rm_edge_key) of the edges opposite a corner of a live triangle whose angle is
- * not acute or right (obtuse_corners) into set; false when out of memory (set then empty). An
+/* Edges {a, b}, a < b, as lists per vertex a: a handful of entries a vertex at most, so a
+ * look-up is a short walk and an addition two writes (no hashing, nothing rebuilt as it
+ * grows). */
+typedef struct edge_lists {
+    uint32_t *head;          /* per vertex: its newest entry, or UINT32_MAX */
+    uint32_t (*e)[2];        /* per entry: a's next entry (UINT32_MAX: none), b */
+    size_t n, cap;
+} edge_lists;
+
+static bool lists_init(edge_lists *l, size_t nverts)
+{
+    *l = (edge_lists){0};
+    if (!(l->head = malloc((nverts ? nverts : 1) * sizeof *l->head)))
+        return false;
+    memset(l->head, 0xff, nverts * sizeof *l->head);
+    return true;
+}
+
+static void lists_free(edge_lists *l)
+{
+    free(l->head);
+    free(l->e);
+}
+
+/* Adds {a, b}; false when out of memory. */
+static bool lists_add(edge_lists *l, uint32_t a, uint32_t b)
+{
+    uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
+    if (l->n == l->cap) {
+        size_t cap = l->cap ? 2 * l->cap : 1024;
+        uint32_t(*e)[2] = realloc(l->e, cap * sizeof *e);
+        if (!e)
+            return false;
+        l->e = e;
+        l->cap = cap;
+    }
+    l->e[l->n][0] = l->head[lo];
+    l->e[l->n][1] = hi;
+    l->head[lo] = (uint32_t)l->n++;
+    return true;
+}
+
+/* {a, b} with a < b is in l. */
+static bool lists_has(const edge_lists *l, uint32_t a, uint32_t b)
+{
+    for (uint32_t i = l->head[a]; i != UINT32_MAX; i = l->e[i][0])
+        if (l->e[i][1] == b)
+            return true;
+    return false;
+}
+
+/* The edges opposite a corner of a live triangle with a corner in near whose angle is not
+ * acute or right (obtuse_corners) into set; false when out of memory (set then freed). An
  * edge whose angles opposite it, in both its triangles, are at most 90° fails not_delaunay:
  * sc cd + cc sd is a sum of products of non-negative numbers. On the presets' meshes most
- * are: the Delaunay test for an edge pushed first needs its quad found (rm_edge_triangles),
- * the key a hash lookup. (A sorted array and binary searches were 19% of the flips'
- * instructions on the torus under its default bound, the sort 6%.) */
-static bool obtuse_edges(const rm_pass *p, const uint8_t *near, ism_key_map *set)
+ * are: the Delaunay test for an edge pushed first needs its quad found (rm_edge_triangles).
+ * (A sorted array and binary searches were 19% of the flips' instructions on the torus under
+ * its default bound, the sort 6%; a hash set of edge keys, rebuilt each call, 13.1M of the
+ * cube's 155M in its 0.37-cell box.) */
+static bool obtuse_edges(const rm_pass *p, const uint8_t *near, edge_lists *set)
 {
     const ism_mesh *m = p->r.m;
-    bool added;
-    ism_key_map_init(set);
+    if (!lists_init(set, m->nverts))
+        return false;
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
-        if (near && !(near[v[0]] | near[v[1]] | near[v[2]]))
+        if (!(near[v[0]] | near[v[1]] | near[v[2]]))
             continue;
         uint8_t bits = p->r.dead[t] ? 0 : obtuse_corners(p, t);
         for (int k = 0; bits && k < 3; k++)
-            if ((bits >> k & 1) &&
-                ism_key_map_add(set, rm_edge_key(v[k], v[(k + 1) % 3]), &added) == ISM_KEY_NONE) {
-                ism_key_map_free(set);
+            if ((bits >> k & 1) && !lists_add(set, v[k], v[(k + 1) % 3])) {
+                lists_free(set);
                 return false;
             }
     }
     return true;
 }
 
-/* The corners of the triangles with a corner in seed, into a new array (NULL when out of
- * memory): every triangle on an edge of such a triangle has one of them. */
-static uint8_t *seeded_corners(const rm_pass *p, const uint8_t *seed)
+/* The live triangles with a corner in seed, in order, into *list (how many: *n), and the
+ * corners of those triangles into a new array (NULL when out of memory, *list then NULL
+ * too): every triangle on an edge of a seeded triangle has one of them. */
+static uint8_t *seeded_corners(const rm_pass *p, const uint8_t *seed, uint32_t **list,
+                               size_t *n)
 {
     const ism_mesh *m = p->r.m;
     uint8_t *near = calloc(m->nverts ? m->nverts : 1, 1);
+    uint32_t *l = NULL;
+    size_t cap = 0;
+    *n = 0;
     for (size_t t = 0; near && t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
-        if (!p->r.dead[t] && (seed[v[0]] || seed[v[1]] || seed[v[2]]))
-            near[v[0]] = near[v[1]] = near[v[2]] = 1;
+        if (p->r.dead[t] || !(seed[v[0]] | seed[v[1]] | seed[v[2]]))
+            continue;
+        near[v[0]] = near[v[1]] = near[v[2]] = 1;
+        if (*n == cap) {
+            cap = cap ? 2 * cap : 1024;
+            uint32_t *grown = realloc(l, cap * sizeof *l);
+            if (!grown) {
+                free(near);
+                near = NULL;
+                break;
+            }
+            l = grown;
+        }
+        l[(*n)++] = (uint32_t)t;
     }
+    if (!near)
+        free(l), l = NULL;
+    *list = l;
     return near;
+}
+
+/* Pushes the edges {v[k], v[k + 1]}, v[k] < v[k + 1], of triangle v, those in set only
+ * when it is not NULL; false when out of memory. */
+static bool push_edges(edge_stack *s, const uint32_t *v, const edge_lists *set)
+{
+    static const int next[3] = {1, 2, 0};
+    for (int k = 0; k < 3; k++) {
+        uint32_t a = v[k], b = v[next[k]];
+        if (a < b && (!set || lists_has(set, a, b)) && !push(s, a, b))
+            return false;
+    }
+    return true;
 }
 
 size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok)
 {
     const ism_mesh *m = p->r.m;
     edge_stack s = {0};
-    size_t flips = 0, limit = ISM_RM_FLIPS_PER_TRIANGLE * m->ntris;
-    ism_key_map obtuse;
+    size_t flips = 0, limit = ISM_RM_FLIPS_PER_TRIANGLE * m->ntris, nseeded;
+    edge_lists obtuse;
+    uint32_t *seeded;
     /* only the edges of seeded triangles are asked of the set, and both triangles on such an
-       edge have a seeded triangle's corner (NULL, out of memory: every triangle's) */
-    uint8_t *near = seeded_corners(p, seed);
-    bool known = obtuse_edges(p, near, &obtuse); /* (out of memory: every edge pushed) */
+       edge have a seeded triangle's corner (NULL, out of memory: every edge pushed) */
+    uint8_t *near = seeded_corners(p, seed, &seeded, &nseeded);
+    bool known = near && obtuse_edges(p, near, &obtuse);
     free(near);
     *ok = true;
-    for (size_t t = 0; t < m->ntris && *ok; t++) {
-        const uint32_t *v = m->tri + 3 * t;
-        if (!p->r.dead[t] && (seed[v[0]] || seed[v[1]] || seed[v[2]]))
-            for (int k = 0; k < 3 && *ok; k++)
-                if (v[k] < v[(k + 1) % 3] &&
-                    (!known || ism_key_map_find(&obtuse, rm_edge_key(v[k], v[(k + 1) % 3])) !=
-                                   ISM_KEY_NONE))
-                    *ok = push(&s, v[k], v[(k + 1) % 3]);
+    if (seeded) {
+        for (size_t i = 0; i < nseeded && *ok; i++)
+            *ok = push_edges(&s, m->tri + 3 * (size_t)seeded[i], known ? &obtuse : NULL);
+    } else {
+        for (size_t t = 0; t < m->ntris && *ok; t++) {
+            const uint32_t *v = m->tri + 3 * t;
+            if (!p->r.dead[t] && (seed[v[0]] || seed[v[1]] || seed[v[2]]))
+                *ok = push_edges(&s, v, NULL);
+        }
     }
-    ism_key_map_free(&obtuse);
+    free(seeded);
+    if (known)
+        lists_free(&obtuse);
     while (*ok && s.n && flips < limit) {
         uint32_t b = s.e[--s.n], a = s.e[--s.n];
         quad q;
