@@ -51,12 +51,13 @@ static void first_step(rm_pass *p, const double x[3], rm_memo_entry *e)
     first_step_from(p, x, ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], e->g), e);
 }
 
-/* f/|∇f| where the step lands into e->s2 (state S2), or FAIL2. (f alone over |∇f| at x
- * would cost half as much, but |∇f| changes along the step as much as the term itself is
- * worth: the torus at E 3e-3 then ends 7e-6 E beyond the bound.) */
-static void second_step(rm_pass *p, rm_memo_entry *e)
+/* f/|∇f| where the step lands into e->s2 (state S2), or FAIL2, from f's value fy and
+ * gradient h there (second_step evaluates them; rm_bound_distances takes them from a
+ * batch). (f alone over |∇f| at x would cost half as much, but |∇f| changes along the step
+ * as much as the term itself is worth: the torus at E 3e-3 then ends 7e-6 E beyond the
+ * bound.) */
+static inline void second_step_from(rm_pass *p, double fy, const double h[3], rm_memo_entry *e)
 {
-    double h[3], fy = ism_eval_gradient(p->f, p->ws, e->y[0], e->y[1], e->y[2], h);
     double hn = sqrt(ism_dot3(h, h));
     if (!isfinite(fy) || !(hn > p->gthresh)) {
         e->state = RM_MEMO_FAIL2;
@@ -64,6 +65,12 @@ static void second_step(rm_pass *p, rm_memo_entry *e)
     }
     e->s2 = fy / hn;
     e->state = RM_MEMO_S2;
+}
+
+static void second_step(rm_pass *p, rm_memo_entry *e)
+{
+    double h[3], fy = ism_eval_gradient(p->f, p->ws, e->y[0], e->y[1], e->y[2], h);
+    second_step_from(p, fy, h, e);
 }
 
 /* x's memo entry (own when the pass keeps no memo) with its first step taken. */
@@ -152,6 +159,58 @@ double rm_bound_distance(rm_pass *p, const double x[3], double limit)
     return two_steps(p, x, limit, true, &s1, &s2) ? fabs(s1) + fabs(s2) : INFINITY;
 }
 
+/* Points rm_bound_distances evaluates in one call of the batched evaluator (its stack
+ * arrays): two of its chunks. */
+#define RM_DISTANCES_CHUNK (2 * ISM_GRAD_BATCH)
+
+/* rm_bound_distances for at most RM_DISTANCES_CHUNK points: their first steps in one batch,
+ * then the second steps those need (|s1| above RM_BOUND_ONE_STEP_SHARE × max_error, as
+ * steps_at asks with an infinite limit) in another. */
+static void distances_chunk(rm_pass *p, const double (*x)[3], size_t n, double *d, double *gn)
+{
+    double px[RM_DISTANCES_CHUNK], py[RM_DISTANCES_CHUNK], pz[RM_DISTANCES_CHUNK];
+    double fv[RM_DISTANCES_CHUNK], g[RM_DISTANCES_CHUNK][3];
+    for (size_t i = 0; i < n; i++)
+        px[i] = x[i][0], py[i] = x[i][1], pz[i] = x[i][2];
+    ism_eval_gradient_batch(p->f, p->ws, px, py, pz, fv, g, n);
+    if (!p->bounded) { /* rm_distance without a bound: one step's length */
+        for (size_t i = 0; i < n; i++) {
+            double len = sqrt(ism_dot3(g[i], g[i]));
+            if (gn)
+                gn[i] = len;
+            d[i] = len > p->gthresh && isfinite(fv[i]) ? fabs(fv[i]) / len : INFINITY;
+        }
+        return;
+    }
+    rm_memo_entry e[RM_DISTANCES_CHUNK];
+    size_t m = 0, at[RM_DISTANCES_CHUNK];
+    for (size_t i = 0; i < n; i++) {
+        memcpy(e[i].g, g[i], sizeof e[i].g);
+        first_step_from(p, x[i], fv[i], &e[i]);
+        if (gn)
+            gn[i] = 0;
+        if (e[i].state == RM_MEMO_S1 && fabs(e[i].s1) > RM_BOUND_ONE_STEP_SHARE * p->max_error)
+            at[m] = i, px[m] = e[i].y[0], py[m] = e[i].y[1], pz[m] = e[i].y[2], m++;
+    }
+    if (m)
+        ism_eval_gradient_batch(p->f, p->ws, px, py, pz, fv, g, m);
+    for (size_t j = 0; j < m; j++)
+        second_step_from(p, fv[j], g[j], &e[at[j]]);
+    for (size_t i = 0; i < n; i++) {
+        double s1, s2;
+        d[i] = steps_at(p, &e[i], x[i], INFINITY, true, &s1, &s2) ? fabs(s1) + fabs(s2)
+                                                                   : INFINITY;
+    }
+}
+
+void rm_bound_distances(rm_pass *p, const double (*x)[3], size_t n, double *d, double *gn)
+{
+    for (size_t i = 0; i < n; i += RM_DISTANCES_CHUNK) {
+        size_t k = n - i < RM_DISTANCES_CHUNK ? n - i : RM_DISTANCES_CHUNK;
+        distances_chunk(p, x + i, k, d + i, gn ? gn + i : NULL);
+    }
+}
+
 /* The residual of a first step of length s1 bends by at most κ s1² / 2; the one-step rule
  * holds for κ × max_error up to 2 (1 - share) / share² (above), so the step's residual is
  * at most that over 2 max_error, times s1². */
@@ -176,7 +235,8 @@ double rm_bound_signed(rm_pass *p, const double x[3])
 
 bool rm_bound_edge(rm_pass *p, const double *a, const double *b)
 {
-    double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+    double m[3];
+    rm_midpoint(a, b, m);
     return rm_bound_distance(p, m, p->max_error) <= p->max_error;
 }
 

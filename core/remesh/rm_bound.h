@@ -33,6 +33,14 @@
  * does or more strictly (sp_place.c's `< before` may refuse a move the measure would take). */
 double rm_bound_distance(rm_pass *p, const double x[3], double limit);
 
+/* d[i] = rm_distance(p, x[i]) for i < n, bit for bit (rm_bound_distance with an infinite
+ * limit under a bound; |f|/|∇f| without one, with |∇f| into gn[i], 0 under a bound; gn may
+ * be NULL), through the batched evaluator: one pass over the tape for a chunk of points'
+ * first steps and one for the second steps they need. The memo is neither read nor written
+ * (points measured once, as the found mesh's: they would only push out what the moves will
+ * ask again). */
+void rm_bound_distances(rm_pass *p, const double (*x)[3], size_t n, double *d, double *gn);
+
 /* An upper bound on the distance from x to f = 0, as far as the bound max_error needs one:
  * rm_bound_distance with limit max_error, and where it took one step (|f|/|∇f| at most half
  * the bound) that step's residual at the steepest bend of f's level set the one-step rule
@@ -53,6 +61,13 @@ bool rm_bound_gradient(rm_pass *p, const double x[3], double g[3]);
  * smallest first): the same bits whichever corner comes first, so the memo (rm_memo.h)
  * knows a centroid however a caller lists its triangle's corners. */
 void rm_centroid(const double *a, const double *b, const double *c, double m[3]);
+
+/* The midpoint of ab into m, as every measure of an edge's midpoint works it out. */
+static inline void rm_midpoint(const double *a, const double *b, double m[3])
+{
+    for (int k = 0; k < 3; k++)
+        m[k] = 0.5 * (a[k] + b[k]);
+}
 
 /* True when the midpoint of ab lies within max_error of f = 0. */
 bool rm_bound_edge(rm_pass *p, const double *a, const double *b);
