@@ -418,13 +418,18 @@ size_t rm_mark_active(rm_pass *p)
         if (s < comfort)
             p->active[v[0]] = p->active[v[1]] = p->active[v[2]] = 1;
     }
-    for (size_t v = 0; v < m->nverts; v++) /* 1 = near a poor triangle, 2 = its neighbour */
-        for (uint32_t i = 0; p->active[v] == 1 && i < r->count[v]; i++) {
-            const uint32_t *t = m->tri + 3 * r->vt[r->start[v] + i];
-            for (int k = 0; k < 3; k++)
-                if (!p->active[t[k]])
-                    p->active[t[k]] = 2;
-        }
+    /* 1 = near a poor triangle, 2 = its neighbour: the unmarked corners of every live
+       triangle with a corner marked 1 (every live triangle is in each of its corners' slots,
+       rm_mesh.h), read once per triangle rather than once per marked corner's fan: callgrind,
+       cube in the 0.37-cell box, this function 18.9M -> 13.3M instructions */
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        uint8_t *a = p->active;
+        if (r->dead[t] || !(a[v[0]] == 1 || a[v[1]] == 1 || a[v[2]] == 1))
+            continue;
+        for (int k = 0; k < 3; k++)
+            a[v[k]] = a[v[k]] ? a[v[k]] : 2;
+    }
     size_t n = 0;
     for (size_t v = 0; v < m->nverts; v++)
         n += p->active[v] != 0;
