@@ -2,6 +2,7 @@
  * carries a value and its three partial derivatives. min and max follow the branch they
  * take (the derivative of the side that is the result). */
 #include "core/eval/deriv_rules.h"
+#include "core/eval/lanes4.h"
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
 #include <string.h>
@@ -61,38 +62,32 @@ static ism_dual dual_op(const ism_instr *in, const ism_dual *r, ism_trig_cache *
     return out;
 }
 
-/* A dual number as one value of GCC's vector extension, lanes v, d[0], d[1], d[2]: each
- * lane the scalar code's IEEE operation (one AVX2 register in the tape loop's AVX2 clone,
- * two SSE2 ones elsewhere), so the bits are the scalar code's. Loads and stores through
- * memcpy (no alignment or aliasing assumption). */
-#pragma GCC diagnostic ignored "-Wpsabi" /* dual4 is only passed between always_inline helpers:
-                                             no call ever uses the AVX return convention */
-typedef double dual4 __attribute__((vector_size(4 * sizeof(double))));
-_Static_assert(sizeof(ism_dual) == sizeof(dual4), "ism_dual is v, d[0..2] in a row");
+/* A dual number as one value of GCC's vector extension (lanes4.h), lanes v, d[0], d[1],
+ * d[2]: each lane the scalar code's IEEE operation (one AVX2 register in the tape loop's AVX2
+ * clone, two SSE2 ones elsewhere), so the bits are the scalar code's. */
+_Static_assert(sizeof(ism_dual) == sizeof(v4d), "ism_dual is v, d[0..2] in a row");
 
 #define INLINE static inline __attribute__((always_inline))
 
-INLINE dual4 dld(const ism_dual *a)
+INLINE v4d dld(const ism_dual *a)
 {
-    dual4 v;
-    __builtin_memcpy(&v, a, sizeof v);
-    return v;
+    return ld((const double *)(const void *)a);
 }
 
-INLINE void dst(ism_dual *o, dual4 v)
+INLINE void dst(ism_dual *o, v4d v)
 {
-    __builtin_memcpy(o, &v, sizeof v);
+    st((double *)(void *)o, v);
 }
 
-INLINE dual4 splat(double c)
+INLINE v4d splat(double c)
 {
-    return (dual4){c, c, c, c};
+    return (v4d){c, c, c, c};
 }
 
 /* out = g(a) with g' = g1: the chain rule, 0 where g1 is 0 (even when ∇a is not finite). */
 INLINE void dual_chain(ism_dual *out, double g, double g1, const ism_dual *a)
 {
-    dual4 d = g1 == 0.0 ? splat(0.0) : splat(g1) * dld(a);
+    v4d d = g1 == 0.0 ? splat(0.0) : splat(g1) * dld(a);
     d[0] = g;
     dst(out, d);
 }
@@ -112,8 +107,8 @@ INLINE void dual_step(const ism_instr *in, ism_dual *r, ism_trig_cache *trig)
         dst(o, dld(a) - dld(&r[in->b]));
         return;
     case ISM_OP_MUL_RR: { /* v = a b; d = a' b + a b' (each lane in that order) */
-        dual4 va = dld(a), vb = dld(&r[in->b]);
-        dual4 left = va * splat(vb[0]), d = left + splat(va[0]) * vb;
+        v4d va = dld(a), vb = dld(&r[in->b]);
+        v4d left = va * splat(vb[0]), d = left + splat(va[0]) * vb;
         d[0] = left[0];
         dst(o, d);
         return;

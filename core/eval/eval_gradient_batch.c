@@ -11,6 +11,7 @@
  * group by repeating its last point. The tape loop is compiled for AVX2 and for the
  * x86-64 baseline, chosen at run time (as eval_double.c does). */
 #include "core/eval/deriv_rules.h"
+#include "core/eval/lanes4.h"
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
 #include <stdint.h>
@@ -28,25 +29,8 @@ static inline double *comp(double *regs, uint32_t r, int k)
 
 #define INLINE static inline __attribute__((always_inline))
 
-/* VL lanes as one value of GCC's vector extension: AVX2 registers in the AVX2 clone, pairs
- * of SSE2 ones in the baseline; element by element the same IEEE operations as the scalar
- * code. Loads and stores through memcpy (no alignment or aliasing assumption). */
-#pragma GCC diagnostic ignored "-Wpsabi" /* v4d is only passed between always_inline helpers:
-                                             no call ever uses the AVX return convention */
-typedef double v4d __attribute__((vector_size(VL * sizeof(double))));
-typedef long long v4i __attribute__((vector_size(VL * sizeof(double))));
-
-INLINE v4d ld(const double *p)
-{
-    v4d v;
-    __builtin_memcpy(&v, p, sizeof v);
-    return v;
-}
-
-INLINE void st(double *p, v4d v)
-{
-    __builtin_memcpy(p, &v, sizeof v);
-}
+/* VL lanes as one value of GCC's vector extension (lanes4.h). */
+_Static_assert(sizeof(v4d) == VL * sizeof(double), "a group is one v4d");
 
 /* c where m is set, else +0.0: the chain rule's "0 where g' is 0" as a mask */
 INLINE v4d keep(v4d c, v4i m)
