@@ -52,8 +52,9 @@ static bool find_quad(const rm_pass *p, uint32_t a, uint32_t b, quad *q)
     q->cen[0][4] = q->cen[1][4] = 0;
     q->t1 = t[0];
     q->t2 = t[1];
-    q->c = tri[3 * t[0] + (rm_corner(r->m, t[0], a) + 2) % 3];
-    q->d = tri[3 * t[1] + (rm_corner(r->m, t[1], b) + 2) % 3];
+    /* the corner of each that is neither a nor b (a is before b in t[0], after it in t[1]) */
+    q->c = tri[3 * t[0]] ^ tri[3 * t[0] + 1] ^ tri[3 * t[0] + 2] ^ a ^ b;
+    q->d = tri[3 * t[1]] ^ tri[3 * t[1] + 1] ^ tri[3 * t[1] + 2] ^ a ^ b;
     return q->c != q->d && q->c != a && q->c != b && q->d != a && q->d != b;
 }
 
@@ -88,8 +89,10 @@ static double corner_dot(const double *A, const double *B, const double *C)
  * cross and dot products (no arc tangents; both angles lie in [0, π]). */
 static bool not_delaunay(const double *A, const double *B, const double *C, const double *D)
 {
-    double n[3], sc = rm_cross(C, A, B, n), sd = rm_cross(D, B, A, n);
     double cc = corner_dot(A, B, C), cd = corner_dot(A, B, D);
+    if (cc >= 0 && cd >= 0)
+        return false; /* neither angle obtuse: the sum below is of non-negative products */
+    double n[3], sc = rm_cross(C, A, B, n), sd = rm_cross(D, B, A, n);
     /* sin(γ + δ) |CA||CB||DA||DB| = sc cd + cc sd */
     double sum = sc * cd + cc * sd;
     if (!(sum < 0))
@@ -145,8 +148,10 @@ static bool flip_improves_at(rm_pass *p, const double *A, const double *B, const
     double l1 = rm_cross(A, B, C, n1), l2 = rm_cross(B, A, D, n2);
     double k1 = rm_cross(A, D, C, m1), k2 = rm_cross(B, C, D, m2);
     double s[3] = {n1[0] + n2[0], n1[1] + n2[1], n1[2] + n2[2]};
-    bool cap = rm_is_cap(A, B, C) || rm_is_cap(B, A, D);
-    if ((!cap && !bend_ok(n1, l1, n2, l2)) || !bend_ok(m1, k1, m2, k2) || !(ism_dot3(m1, s) > 0) ||
+    /* a cap is asked only where the bend fails, or for the bound without max_error */
+    bool bent = !bend_ok(n1, l1, n2, l2);
+    bool cap = (bent || !p->bounded) && (rm_is_cap(A, B, C) || rm_is_cap(B, A, D));
+    if ((bent && !cap) || !bend_ok(m1, k1, m2, k2) || !(ism_dot3(m1, s) > 0) ||
         !(ism_dot3(m2, s) > 0))
         return false;
     double before = fmin(rm_min_sine(A, B, C), rm_min_sine(B, A, D));
