@@ -259,7 +259,7 @@ bool ism_cell_polygonise(ism_cell_ctx *cx, int32_t node, ism_cell_out *out)
             return false;
         if (face < 0) {
             bool cut = false;
-            if (cx->max_error > 0 &&
+            if (cx->cut_creases &&
                 !ism_crease_cut_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out, &cut))
                 return false;
             if (!cut && !ism_triangulate_loop(&cx->s, p, lp->n, reach, box, cx->max_error, out))

@@ -26,6 +26,13 @@ typedef struct ism_cell_ctx {
     double max_error;         /* > 0: polygons may be fanned from a corner within this
                                  distance of f = 0 (triangulate.h); 0: from their centre
                                  (no bound, or a singular locus is known: options.quiet) */
+    bool cut_creases;         /* a polygon whose corners lie on both sides of f's min/max
+                                 crease is cut along it, one polygon per side
+                                 (crease_split.h ism_crease_cut_loop): under a bound where no
+                                 locus is known; where one is, only while polygonise.c's
+                                 one_leaf polygonises a leaf again whose fans, split along
+                                 the crease, left it unresolved (the sides then fanned from
+                                 their centres: max_error 0) */
     bool walk_every_tile;     /* the tile memos (cell_cache.h) are neither asked nor filled
                                  (poly_options.h's walk_every_tile: the reference the tests
                                  compare memo hits with) */

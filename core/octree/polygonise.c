@@ -220,6 +220,50 @@ static void measure_unflat(const phase2 *p, padded_ctx *pc, int32_t leaf,
         pc->unflat_worst = e;
 }
 
+/* Leaf i polygonised into out (its output from vertex v0 and triangle t0 on) and, under
+ * max_error, cut along a CSG crease and measured into *e; *unresolved: ism_crease_unresolved's
+ * verdict on its triangles, asked when the crease test applies (it then makes *e infinite:
+ * the leaf is split) or fold_test is set. */
+static bool leaf_measured(phase2 *p, ism_cell_ctx *cx, size_t i, ism_cell_out *out, size_t v0,
+                          size_t t0, bool fold_test, double *e, bool *unresolved)
+{
+    bool ok = ism_cell_polygonise(cx, p->leaves[i], out) &&
+              /* under max_error: cut along a CSG crease before measuring */
+              (!p->leaf_error || ism_crease_split(&cx->s, out, t0));
+    *e = 0;
+    *unresolved = false;
+    /* the crease test below may take the measuring's centroid gradients (not the
+       straddle's: it measures moved vertices) */
+    bool crease_test = p->leaf_error && !p->last_round &&
+                       p->tree->nodes[p->leaves[i]].level < p->o->max_depth;
+    bool ask = crease_test || fold_test;
+    double(*cg)[3] = NULL, cg_stack[CENTROIDS_ON_STACK][3];
+    if (ok && p->leaf_error && p->straddle > 0) {
+        ok = ism_straddle_emitted_error(&cx->s, p->straddle, p->o->box, out, v0, t0, e);
+    } else if (ok && p->leaf_error) {
+        size_t n = out->ntris - t0;
+        cg = !ask                       ? NULL
+             : n <= CENTROIDS_ON_STACK ? cg_stack
+                                       : malloc(n * sizeof *cg); /* NULL: sampled again */
+        *e = ism_emitted_error_kept(&cx->s, out, t0, INFINITY, cg);
+    }
+    /* a crease the leaf's triangles do not follow (a triangle turned against ∇f, a
+       bump of the other branch between corners, a chord of the crease E / 2 off it):
+       split while the leaf may be; at depth.max or in the last round what was measured
+       stands (without it the gyroid ball at E = 3e-3, depth 9, had 6–12 edge midpoints
+       no zero was proved within E of, test_polygonise_accuracy.c; marked in the last
+       round, 6 leaves of the gyroid ball at E = 1e-4 within E by the closed forms were
+       counted missed with an infinite worst distance) */
+    if (ok && ask && (fold_test || *e <= p->o->max_error))
+        *unresolved = ism_crease_unresolved(&cx->s, out, t0, p->o->max_error,
+                                            (const double(*)[3])cg);
+    if (crease_test && *unresolved && *e <= p->o->max_error)
+        *e = INFINITY;
+    if (cg != cg_stack)
+        free(cg);
+    return ok;
+}
+
 /* Leaf i of chunk into out: copied from the last round when it emits the same there, else
  * polygonised (and measured under max_error). */
 static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell_out *out)
@@ -235,37 +279,23 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
     } else {
         ism_cell_stats before = cx->stats;
         leaf_sampler(cx, p->leaves[i]);
-        bool ok = ism_cell_polygonise(cx, p->leaves[i], out) &&
-                  /* under max_error: cut along a CSG crease before measuring */
-                  (!p->leaf_error || ism_crease_split(&cx->s, out, t0));
-        double e = 0;
-        /* the crease test below may take the measuring's centroid gradients (not the
-           straddle's: it measures moved vertices) */
-        bool crease_test = p->leaf_error && !p->last_round &&
-                           p->tree->nodes[p->leaves[i]].level < p->o->max_depth;
-        double(*cg)[3] = NULL, cg_stack[CENTROIDS_ON_STACK][3];
-        if (ok && p->leaf_error && p->straddle > 0) {
-            ok = ism_straddle_emitted_error(&cx->s, p->straddle, p->o->box, out, v0, t0, &e);
-        } else if (ok && p->leaf_error) {
-            size_t n = out->ntris - t0;
-            cg = !crease_test            ? NULL
-                 : n <= CENTROIDS_ON_STACK ? cg_stack
-                                         : malloc(n * sizeof *cg); /* NULL: sampled again */
-            e = ism_emitted_error_kept(&cx->s, out, t0, INFINITY, cg);
+        double e;
+        bool unresolved, fold_test = p->leaf_error && !cx->cut_creases;
+        bool ok = leaf_measured(p, cx, i, out, v0, t0, fold_test, &e, &unresolved);
+        if (ok && fold_test && unresolved) {
+            /* where a locus is known (no crease cut, cell_ctx.h): the centre's fan split
+               along the crease leaves it unresolved, so the leaf is polygonised again with
+               the cut (fan and split fold where the crease runs round the fan's centre:
+               Barth's sextic at E 0.0259, 24 leaves split for 5 more rounds and 108
+               triangles turned in its mesh; cut everywhere, 104 instead of 24 leaves of
+               its E 0.00389 mesh measured beyond E in round 1: a chord follows a crease
+               bending through a coarse leaf less well than the fan's crease points) */
+            out->nverts = v0, out->ntris = t0, out->nsegs = s0;
+            cx->stats = before;
+            cx->cut_creases = true;
+            ok = leaf_measured(p, cx, i, out, v0, t0, false, &e, &unresolved);
+            cx->cut_creases = false;
         }
-        /* a crease the leaf's triangles do not follow (a triangle turned against ∇f, a
-           bump of the other branch between corners, a chord of the crease E / 2 off it):
-           split while the leaf may be; at depth.max or in the last round what was measured
-           stands (without it the gyroid ball at E = 3e-3, depth 9, had 6–12 edge midpoints
-           no zero was proved within E of, test_polygonise_accuracy.c; marked in the last
-           round, 6 leaves of the gyroid ball at E = 1e-4 within E by the closed forms were
-           counted missed with an infinite worst distance) */
-        if (ok && crease_test && e <= p->o->max_error &&
-            ism_crease_unresolved(&cx->s, out, t0, p->o->max_error,
-                                  (const double(*)[3])cg))
-            e = INFINITY;
-        if (cg != cg_stack)
-            free(cg);
         err = (float)e;
         if (ok && !p->leaf_error)
             measure_unflat(p, pc, p->leaves[i], out, t0);
@@ -550,6 +580,9 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         /* corner fans only where no singular locus is known: beside a double curve they
          * changed what the conformance pass rebuilt (Steiner at E = 0.01: χ 5 -> −1) */
         cx->max_error = o->nquiet ? 0 : o->max_error;
+        /* the crease cut with them; where they are off, one_leaf cuts a leaf whose fans
+           split along the crease leave it unresolved */
+        cx->cut_creases = cx->max_error > 0;
         if (!(cx->s.ws = ism_eval_ws_new(f)) ||
             !round_cache(c, pool, &outer->par, t, &cx->cache))
             goto done;

@@ -128,3 +128,48 @@ Test(folds, schwarz_d_has_few_triangles_turned_over)
 {
     run(&PRESETS[2]);
 }
+
+/* Barth's nodal sextic in the ball r² ≤ 2.25 (bench_error's barth-sextic) at E = 0.0259, the
+ * bound its 1e-2 row of the equal-error bench meshes at, depth.max 10, in the three
+ * placements. Its singular locus (the sextic's nodes) is known, so no polygon is fanned from a
+ * corner nor cut along the crease (polygonise.c): a polygon the crease crosses is fanned from
+ * its centre and the fan split along the crease. Where the crease runs round the fan's centre
+ * (24 spots where the sextic pokes through the sphere in a disc ~0.08 across, near (±0.08,
+ * −0.51, −1.41) and its images) the split fan folded; those leaves were split again for five
+ * rounds and the mesh kept 108 / 45 / 12 triangles turned over in the three boxes (this
+ * test's count on the code before). Now such a leaf is polygonised again with the crease cut:
+ * none turned, and the centroids and edge midpoints stay within E. */
+Test(folds, nodal_sextic_with_its_locus_known_has_no_triangle_turned_over)
+{
+    static const ism_param phi[] = {{"phi", 1.6180339887498949}};
+    const pf_surface barth = {
+        "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
+        "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
+        phi, 1, NULL, 0};
+    const double own[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6}, e = 0.0259;
+    ism_tape *t = pf_compile(&barth);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert(ws);
+    for (int which = pf_first_box() - 1; which <= 1; which++) {
+        double box[6];
+        pf_sweep_box(own, DMAX, which, box);
+        ism_mesh m;
+        ism_locus l;
+        pf_run_surface_bounded(t, box, DMIN, DMAX, e, &m, &l);
+        cr_assert(l.npoints > 0 && !l.incomplete, "box %d: the locus is known (%zu points)",
+                  which, l.npoints);
+        size_t turned = turned_over(t, ws, &m), below;
+        double worst = pf_worst_turned(&m, t, NULL, &below);
+        cr_log_info("barth box %d: %zu of %zu triangles turned over, worst distance %g", which,
+                    turned, m.ntris, worst);
+        cr_expect_eq(turned, 0, "box %d: %zu of %zu triangles turned against ∇f", which, turned,
+                     m.ntris);
+        cr_expect_leq(worst, e, "box %d: a centroid or edge midpoint %g from f = 0", which,
+                      worst);
+        cr_expect(m.ntris > 20000, "box %d: %zu triangles", which, m.ntris);
+        ism_locus_free(&l);
+        ism_mesh_free(&m);
+    }
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
