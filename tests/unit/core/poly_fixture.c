@@ -428,6 +428,11 @@ const pf_surface pf_unit_sphere = {"x^2 + y^2 + z^2 - r^2", unit_r, 1, NULL, 0};
 static const ism_param ring_rr[] = {{"R", 1}, {"r", 0.3}};
 const pf_surface pf_ring_torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
                                   ring_rr, 2, NULL, 0};
+static const ism_param barth_phi[] = {{"phi", 1.6180339887498949}};
+const pf_surface pf_barth_sextic = {
+    "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
+    "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
+    barth_phi, 1, NULL, 0};
 
 double pf_unit_sphere_dist(const double p[3])
 {

@@ -134,6 +134,10 @@ extern const pf_surface pf_unit_sphere, pf_ring_torus;
 double pf_unit_sphere_dist(const double p[3]);
 double pf_ring_torus_dist(const double p[3]);
 
+/* Barth's nodal sextic (65 nodes, 30 of them inside) in the ball r² ≤ 2.25: bench_error's
+ * barth-sextic, a locus of nodes and a min/max crease where the sextic meets the sphere. */
+extern const pf_surface pf_barth_sextic;
+
 /* Distance from p to f = 0 by Newton's projection (the last iterate's distance plus its
  * |f| / |∇f| when it does not settle: an over-estimate). */
 double pf_newton_dist(const ism_tape *t, ism_eval_ws *ws, const double p[3]);

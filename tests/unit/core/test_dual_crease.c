@@ -40,11 +40,6 @@ static const pf_surface lens = {"max((x - 0.5)^2 + y^2 + z^2 - 1, (x + 0.5)^2 + 
                                 NULL, 0, NULL, 0};
 static const pf_surface corner = {"max(max(x^2 + y^2 + z^2 - 1, z - 0.5), x - 0.5)", NULL, 0,
                                   NULL, 0};
-static const ism_param barth_params[] = {{"phi", 1.6180339887498949}};
-static const pf_surface barth = {
-    "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
-    "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
-    barth_params, 1, NULL, 0};
 
 /* Directions searched round a point Newton puts beyond E (within_e): a Fibonacci sphere of
  * this many, about 3.2° apart, enough to meet any sheet crossing the ball of radius E. */
@@ -417,7 +412,7 @@ static int barth_in_boxes(const ism_tape *t, double e, int declines_from)
 
 Test(dual_crease, barth_in_a_ball_as_the_primal_path)
 {
-    ism_tape *t = pf_compile(&barth);
+    ism_tape *t = pf_compile(&pf_barth_sextic);
     int made = barth_in_boxes(t, 1e-2, 2);
     cr_expect_geq(made, pf_first_box() > 1 ? 0 : 2, "the dual mesh in %d boxes", made);
     ism_tape_free(t);
@@ -431,7 +426,7 @@ Test(dual_crease, barth_pairs_beside_the_ridge)
 {
     if (pf_quick())
         return;
-    ism_tape *t = pf_compile(&barth);
+    ism_tape *t = pf_compile(&pf_barth_sextic);
     barth_in_boxes(t, 3e-3, 1);
     ism_tape_free(t);
 }

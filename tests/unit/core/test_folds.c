@@ -141,13 +141,8 @@ Test(folds, schwarz_d_has_few_triangles_turned_over)
  * none turned, and the centroids and edge midpoints stay within E. */
 Test(folds, nodal_sextic_with_its_locus_known_has_no_triangle_turned_over)
 {
-    static const ism_param phi[] = {{"phi", 1.6180339887498949}};
-    const pf_surface barth = {
-        "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
-        "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
-        phi, 1, NULL, 0};
     const double own[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6}, e = 0.0259;
-    ism_tape *t = pf_compile(&barth);
+    ism_tape *t = pf_compile(&pf_barth_sextic);
     ism_eval_ws *ws = ism_eval_ws_new(t);
     cr_assert(ws);
     for (int which = pf_first_box() - 1; which <= 1; which++) {

@@ -119,13 +119,8 @@ Test(cases, deterministic_and_thread_independent)
  * path starts at 2^15 corners: reached here). */
 Test(cases, nodal_sextic_thread_independent_off_lattice)
 {
-    static const ism_param phi[] = {{"phi", 1.6180339887498949}};
-    const pf_surface barth = {
-        "max(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
-        "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
-        phi, 1, NULL, 0};
     const double base[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6};
-    ism_tape *t = pf_compile(&barth);
+    ism_tape *t = pf_compile(&pf_barth_sextic);
     same_on_1_2_4_threads(t, base, 6 - pf_quick(), 5000, true, "barth-sextic");
     ism_tape_free(t);
 }
