@@ -317,6 +317,189 @@ static int coarsest_open(const dual *d, size_t t, int m)
     return top;
 }
 
+/* A side is split (split_sides) only while its midpoint lies within this many E of f = 0.
+ * Its halves sag a quarter as far (a chord's sag grows with its length squared): under the
+ * straddle move a side 2 E off sags 2.9 E, its halves 0.73 E, within E with room to spare;
+ * a side farther off is an early round's, and its halves' triangles could be worse than the
+ * round's finer leaves. Measured (bench_error mesh S E 10, one thread, triangles and rounds):
+ * the sphere at E 0.0141 (the bench's 1e-2 setting) missed on nothing but twelve sides
+ * between level-3 leaves at 1.023 E (feet 0.46 apart: the radial foot of a centre 0.82 from
+ * the origin spreads the leaves' spacing 0.375 by 1 / 0.82), a whole second round (24 leaves
+ * split, 2.1M of its 4.8M instructions, 456 triangles) for twelve edges: now 384 triangles,
+ * none; the torus at 0.0141 missed on twelve sides at 1.55-1.59 E: 1,144 -> 1,008 triangles
+ * and no round at 1.75 to 2.5 (1.5: unchanged); at 3 the sphere at 1.3e-3 split its first
+ * mesh's sides instead of a round's leaves, 4,284 -> 4,524 triangles. */
+#define SIDE_SPLIT_MAX 2.0
+
+/* One missed side of a triangle: its vertex pair's key and the triangle, edge k from
+ * corner k. */
+typedef struct side_miss {
+    uint64_t key;
+    uint32_t t;
+    uint8_t k;
+} side_miss;
+
+static int by_side(const void *a, const void *b)
+{
+    const side_miss *x = a, *y = b;
+    return x->key != y->key ? (x->key < y->key ? -1 : 1) : (x->t > y->t) - (x->t < y->t);
+}
+
+/* m (a point near f = 0, within size of it) moved onto f = 0 by Newton and then as a leaf's
+ * vertex is (place_vertex: the straddle move) into out; NaN there when Newton cannot
+ * finish. A pure function of m, like the vertices. */
+static void vertex_onto(dual *d, worker *w, double m[3], double size, double out[3])
+{
+    double q[3];
+    if (!ism_dual_newton_onto(w, m, size)) {
+        out[0] = out[1] = out[2] = NAN;
+        return;
+    }
+    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q, NULL))
+        memcpy(m, q, 3 * sizeof *m);
+    memcpy(out, m, 3 * sizeof *m);
+}
+
+/* Task k (job: in the pair keys, out the points): the midpoint of the pair as a vertex
+ * (vertex_onto, within the pair's length), as fan_task makes a fan's centre. */
+static void side_task(void *ctx, size_t k, int thread)
+{
+    task_ctx *job = ctx;
+    dual *d = job->d;
+    worker *w = &d->w[thread];
+    uint64_t key = ((const uint64_t *)job->in)[k];
+    uint32_t a = (uint32_t)((key - 1) >> 32), b = (uint32_t)(key - 1);
+    double m[3], *out = &((double *)job->out)[3 * k];
+    pair_mid(d, key, m);
+    double size = ism_dist3(&d->pos[3 * (size_t)a], &d->pos[3 * (size_t)b]);
+    vertex_onto(d, w, m, size, out);
+}
+
+/* The misses of a round (miss[t], measure_triangles') as missed sides into *out (sorted by
+ * key, two triangles each), when every missed triangle missed on one edge alone, an edge
+ * between two leaves' vertices (no fan's centre) within SIDE_SPLIT_MAX E whose other
+ * triangle missed on it too; how many (0: not so, or out of memory). edge_misses marks the
+ * two ends of each edge beyond E and a centroid's miss marks all three, so a mask of two
+ * bits is one edge's miss: 3 edge 0, 6 edge 1, 5 edge 2. */
+static size_t missed_sides(dual *d, const uint8_t *miss, side_miss **out)
+{
+    static const int8_t EDGE_OF[8] = {-1, -1, -1, 0, -1, 2, 1, -1};
+    side_miss *s = NULL;
+    size_t n = 0, cap = 0;
+    double e = d->o->max_error;
+    bool ok = true;
+    *out = NULL;
+    for (size_t t = 0; ok && t < d->nt; t++) {
+        if (!miss[t])
+            continue;
+        int k = EDGE_OF[miss[t] & 7];
+        uint32_t a = k < 0 ? 0 : d->tri[3 * t + k], b = k < 0 ? 0 : d->tri[3 * t + (k + 1) % 3];
+        ok = k >= 0 && d->vleaf[a] >= 0 && d->vleaf[b] >= 0 &&
+             mid_dist(d, a, b) <= SIDE_SPLIT_MAX * e && grow((void **)&s, &cap, n + 1, sizeof *s);
+        if (ok)
+            s[n++] = (side_miss){pair_key(a, b), (uint32_t)t, (uint8_t)k};
+    }
+    ok = ok && n && n % 2 == 0;
+    if (ok)
+        qsort(s, n, sizeof *s, by_side);
+    for (size_t j = 0; ok && j < n; j += 2)
+        ok = s[j].key == s[j + 1].key && !(j + 2 < n && s[j + 2].key == s[j].key);
+    if (!ok) {
+        free(s);
+        return 0;
+    }
+    *out = s;
+    return n;
+}
+
+/* The round's triangles into tri, each one cut[t] names (a side s[cut[t]], its vertex
+ * v0 + cut[t] / 2) as the two halves of that side, each with the third corner, in place;
+ * the halves' indices into list. Returns how many halves. */
+static size_t halve_triangles(const dual *d, const side_miss *s, const uint32_t *cut,
+                              uint32_t v0, uint32_t *tri, uint32_t *list)
+{
+    size_t m = 0, nl = 0;
+    for (size_t t = 0; t < d->nt; t++) {
+        const uint32_t *u = &d->tri[3 * t];
+        if (cut[t] == UINT32_MAX) {
+            memcpy(&tri[3 * m++], u, 3 * sizeof *u);
+            continue;
+        }
+        int k = s[cut[t]].k;
+        uint32_t c = v0 + cut[t] / 2, a = u[k], b = u[(k + 1) % 3], o = u[(k + 2) % 3];
+        uint32_t two[6] = {a, c, o, c, b, o};
+        memcpy(&tri[3 * m], two, sizeof two);
+        list[nl++] = (uint32_t)m;
+        list[nl++] = (uint32_t)m + 1;
+        m += 2;
+    }
+    return nl;
+}
+
+/* The last round's misses mended without splitting a leaf, where they are all near sides
+ * (missed_sides): each side's two triangles cut in two at a vertex on the side's midpoint's
+ * foot (side_task), the new triangles measured like any. True when every one meets E (then
+ * they stand in the mesh for the missed ones, and the round is the last); false otherwise,
+ * the triangles as they were (the new vertices stay unused). Not with a crease, the grown
+ * box's clip or isolated points' balls, whose own passes read the round's triangles. */
+static bool split_sides(dual *d, const uint8_t *miss)
+{
+    if (d->crease || d->inner || d->nballs)
+        return false;
+    side_miss *s;
+    size_t n = missed_sides(d, miss, &s), ns = n / 2, nt = d->nt, nn = nt + n, cap = nn;
+    if (!n)
+        return false;
+    uint64_t *keys = malloc(ns * sizeof *keys);
+    double *at = malloc(3 * ns * sizeof *at);
+    uint32_t *tri = malloc(3 * nn * sizeof *tri), *list = malloc(2 * n * sizeof *list);
+    uint32_t *cut = malloc(nt * sizeof *cut); /* triangle t's side (s's index), or none */
+    uint8_t *nmiss = malloc(2 * n);
+    bool ok = keys && at && tri && list && cut && nmiss && ism_dual_reserve_vertices(d, ns);
+    for (size_t j = 0; ok && j < ns; j++)
+        keys[j] = s[2 * j].key;
+    if (ok) {
+        task_ctx job = {d, keys, at, ns};
+        ism_pool_for(d->pool, ns, side_task, &job, NULL);
+        memset(cut, 0xff, nt * sizeof *cut);
+    }
+    uint32_t v0 = (uint32_t)d->nv;
+    for (size_t j = 0; ok && j < n; j++) {
+        ok = !isnan(at[3 * (j / 2)]);
+        cut[s[j].t] = (uint32_t)j;
+    }
+    for (size_t j = 0; ok && j < ns; j++) {
+        memcpy(&d->pos[3 * d->nv], &at[3 * j], 3 * sizeof *at);
+        d->vleaf[d->nv] = -1; /* like a fan's centre: no leaf of its own */
+        d->vtwin[d->nv++] = -1;
+    }
+    size_t nl = ok ? halve_triangles(d, s, cut, v0, tri, list) : 0;
+    uint32_t *old = d->tri;
+    size_t oldcap = d->capt;
+    if (ok) {
+        d->tri = tri;
+        d->nt = nn;
+        d->capt = cap;
+        measure_triangles(d, list, nl, nmiss);
+        for (size_t j = 0; j < nl; j++)
+            ok &= !nmiss[j];
+        ok &= !d->nomem;
+        if (!ok) { /* as they were */
+            d->tri = old;
+            d->nt = nt;
+            d->capt = oldcap;
+        }
+    }
+    free(ok ? old : tri);
+    free(s);
+    free(keys);
+    free(at);
+    free(list);
+    free(cut);
+    free(nmiss);
+    return ok;
+}
+
 size_t ism_dual_mark_misses(dual *d, uint64_t *missed)
 {
     size_t marked = 0;
@@ -327,6 +510,10 @@ size_t ism_dual_mark_misses(dual *d, uint64_t *missed)
         return 0;
     }
     measure_triangles(d, NULL, d->nt, miss);
+    if (!d->nomem && split_sides(d, miss)) {
+        free(miss);
+        return 0;
+    }
     for (size_t t = 0; t < d->nt && !d->nomem; t++) {
         int m = miss[t];
         if (!m)
@@ -437,16 +624,16 @@ static uint64_t quad_key(const dual *d, const uint32_t *u)
     return ((uint64_t)u[0] << 48 | (uint64_t)u[1] << 32 | (uint64_t)u[2] << 16 | u[3]) + 1;
 }
 
-/* Task k: the centre of the quad at in[k] into out[3k..3k+3): the mean of its corners moved
- * onto f = 0 by Newton and then as a leaf's vertex is (place_vertex); NaN when Newton cannot
- * finish. A pure function of the corners, like the vertices. */
+/* Task k: the centre of the quad at in[k] into out[3k..3k+3): the mean of its corners as a
+ * vertex (vertex_onto, within the longer diagonal); NaN when Newton cannot finish. A pure
+ * function of the corners, like the vertices. */
 static void fan_task(void *ctx, size_t k, int thread)
 {
     task_ctx *job = ctx;
     dual *d = job->d;
     worker *w = &d->w[thread];
     const uint32_t *u = &d->q.q[4 * ((const uint32_t *)job->in)[k]];
-    double m[3] = {0, 0, 0}, size = 0, q[3], *out = &((double *)job->out)[3 * k];
+    double m[3] = {0, 0, 0}, size = 0, *out = &((double *)job->out)[3 * k];
     for (int j = 0; j < 4; j++)
         for (int a = 0; a < 3; a++)
             m[a] += 0.25 * d->pos[3 * u[j] + a];
@@ -458,13 +645,7 @@ static void fan_task(void *ctx, size_t k, int thread)
         }
         size = fmax(size, sqrt(l));
     }
-    if (!ism_dual_newton_onto(w, m, size)) {
-        out[0] = out[1] = out[2] = NAN;
-        return;
-    }
-    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q, NULL))
-        memcpy(m, q, sizeof m);
-    memcpy(out, m, sizeof m);
+    vertex_onto(d, w, m, size, out);
 }
 
 /* Would four triangles round a centre do better than the two in tri[0..6) (a quad cut across

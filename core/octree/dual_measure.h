@@ -24,7 +24,12 @@ void ism_dual_emit_quads(dual *d);
  * facing along ∇f: measure_triangles); returns how many leaves can still split and counts
  * the misses at max_depth into *missed. A fan's centre (ism_dual_emit_quads) belongs to no leaf: a
  * fan's triangle whose leaves are at max_depth splits the fan's other leaves
- * (mark_fan_leaves). */
+ * (mark_fan_leaves). Where every miss is a side between two leaves' vertices just past E
+ * (within SIDE_SPLIT_MAX E, each missed by its two triangles and nothing else missed: split_sides), the
+ * sides are cut instead, each triangle in two at a vertex on the side's midpoint's foot,
+ * and when all the halves meet E they stand in the mesh and nothing is marked (0): a
+ * sphere-like surface's last round was often a whole level of leaves split for a few chords
+ * a hair too long. Not with a crease, the grown box or isolated points. */
 size_t ism_dual_mark_misses(dual *d, uint64_t *missed);
 
 /* In the grown box: the triangles across the request's box's planes clipped as the final
