@@ -32,37 +32,7 @@ void rm_memo_free(rm_memo *m)
     free(m);
 }
 
-/* x's slot, by its exact bits. */
-static rm_memo_entry *slot_of(const rm_memo *m, const double x[3])
-{
-    uint64_t k[3];
-    memcpy(k, x, sizeof k);
-    uint64_t h = k[0] * 0x9e3779b97f4a7c15ull ^ k[1] * 0xc2b2ae3d27d4eb4full ^
-                 k[2] * 0x165667b19e3779f9ull;
-    h ^= h >> 31;
-    return &m->e[(h * 0xd6e8feb86659fd93ull) >> (64 - m->bits)];
-}
-
-rm_memo_entry *rm_memo_peek(const rm_memo *m, const double x[3])
-{
-    return slot_of(m, x);
-}
-
-bool rm_memo_holds(const rm_memo_entry *e, const double x[3])
-{
-    return e->state != RM_MEMO_EMPTY && memcmp(e->x, x, sizeof e->x) == 0;
-}
-
-rm_memo_entry *rm_memo_claim(rm_memo_entry *e, const double x[3])
-{
-    if (!rm_memo_holds(e, x)) {
-        memcpy(e->x, x, sizeof e->x);
-        e->state = RM_MEMO_EMPTY;
-    }
-    return e;
-}
-
 rm_memo_entry *rm_memo_slot(rm_memo *m, const double x[3])
 {
-    return rm_memo_claim(slot_of(m, x), x);
+    return rm_memo_claim(rm_memo_peek(m, x), x);
 }
