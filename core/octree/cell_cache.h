@@ -29,6 +29,13 @@ typedef struct ism_point_entry {
     double f, g[3];
 } ism_point_entry;
 
+/* The octree build's memo of f and ∇f at node corners (ism_point_memo): 2^16 entries of 40
+ * bytes, 2.5 MB a thread. Its values are pure, so the polygoniser keeps one per thread over
+ * all max_error rounds (octree_build.h's corner_memos) and the cells of a round ask their
+ * thread's before they evaluate a lattice point of their own (face_lines.c lattice_entry):
+ * most points a cell walks are corners the build evaluated in its flatness tests. */
+#define ISM_CORNER_MEMO_BITS 16
+
 /* A lattice point as the cell phase memoises it: one cache line. */
 typedef struct ism_lattice_entry {
     _Alignas(64) uint64_t key; /* 0: empty (lattice keys are stored + 1) */
@@ -175,11 +182,24 @@ static inline ism_label_entry *ism_label_slot(ism_label_entry *table, uint64_t k
     return &table[ism_cache_mix(key) & (((uint64_t)1 << ISM_LABEL_MEMO_BITS) - 1)];
 }
 
-/* The entry of lattice point ip in a direct-mapped table of 2^bits point entries. */
+/* The slot of lattice point ip in a direct-mapped table of 2^bits point entries. */
+static inline size_t ism_point_index(int bits, const int32_t ip[3])
+{
+    return (size_t)(ism_cache_mix(ism_lattice_key(ip)) & (((uint64_t)1 << bits) - 1));
+}
+
 static inline ism_point_entry *ism_point_slot(ism_point_entry *table, int bits,
                                               const int32_t ip[3])
 {
-    return &table[ism_cache_mix(ism_lattice_key(ip)) & (((uint64_t)1 << bits) - 1)];
+    return &table[ism_point_index(bits, ip)];
+}
+
+/* The entry of lattice point ip when the table holds it, else NULL. */
+static inline const ism_point_entry *ism_point_find(const ism_point_entry *table, int bits,
+                                                    const int32_t ip[3])
+{
+    const ism_point_entry *e = &table[ism_point_index(bits, ip)];
+    return e->key == ism_lattice_key(ip) ? e : NULL;
 }
 
 /* f and ∇f at lattice point ip (world position p): from the table, or computed into it. */

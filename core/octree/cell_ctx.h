@@ -22,6 +22,9 @@ typedef struct ism_cell_ctx {
     const struct ism_root_table *found; /* the roots the octree build searched on node edges
                                            (root_table.h), or NULL */
     ism_root_params roots;
+    const ism_point_entry *corners; /* this thread's memo of the octree build's corner values
+                                       (octree_build.h corner_memos), asked before f is
+                                       evaluated at a lattice point; NULL: none */
     double stitch_tol;        /* two roots closer than this × segment length are one */
     double max_error;         /* > 0: polygons may be fanned from a corner within this
                                  distance of f = 0 (triangulate.h); 0: from their centre
@@ -59,6 +62,7 @@ typedef struct ism_cell_ctx {
      * copied leaf adds its stats again): work saved, not a fact of the mesh */
     uint64_t quiet_skips;     /* tiles found in the quiet memo: not walked again */
     uint64_t tile_replays;    /* tiles whose lines were copied from the crossed-tile memo */
+    uint64_t corner_values;   /* lattice points whose f and ∇f came from `corners` */
 } ism_cell_ctx;
 
 #endif

@@ -104,7 +104,17 @@ static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip
         ism_breaks_prefetch(cx->breaks, ip);
         ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, p);
         e->key = key;
-        e->f = ism_sample_grad(&cx->s, p, e->g);
+        /* the build's value when it evaluated the point (the same bits: f and ∇f there are
+         * pure, and every tape either side uses gives f's own inside its box, sampler.h) */
+        const ism_point_entry *c =
+            cx->corners ? ism_point_find(cx->corners, ISM_CORNER_MEMO_BITS, ip) : NULL;
+        if (c) {
+            e->f = c->f;
+            memcpy(e->g, c->g, sizeof e->g);
+            cx->corner_values++;
+        } else {
+            e->f = ism_sample_grad(&cx->s, p, e->g);
+        }
         e->gn = ism_norm3(e->g);
         const double *st = cx->tree->grid.step;
         if (e->f != 0 && ism_sample_zero_by_rounding(&cx->s, p, e->f, e->gn,

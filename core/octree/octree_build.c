@@ -85,7 +85,8 @@ typedef struct build {
     uint8_t *forced_below;       /* per node of previous: 1 when a force_split key's descent
                                     passes it (copy_subtree); NULL: no subtree copied */
     thread_state *threads;
-    ism_point_entry *corner_memos; /* the threads' memos, end to end (thread_state.corners) */
+    ism_point_entry *corner_memos; /* the threads' memos, end to end (thread_state.corners):
+                                      p->corner_memos, or the build's own */
     ism_root_entry *root_memos;    /* ... and thread_state.memo's */
     ism_pair_entry *pair_memos;
     ism_label_entry *label_memos;
@@ -159,7 +160,6 @@ static const ism_tape *node_range(build *b, thread_state *th, const ism_node *nd
     return tape;
 }
 
-#define CORNER_CACHE_BITS 16
 /* A node's corner misses are evaluated in one ism_sample_grad_batch from this many on (the
  * batched gradient's fixed cost per call loses below: Klein bottle's tape, callgrind, 702
  * instructions a point one at a time, 841 / 563 / 423 batched at 2 / 3 / 4 points). */
@@ -182,7 +182,7 @@ static void node_corners(const ism_grid *g, thread_state *th, const ism_tape *ta
     for (int c = 0; c < 8; c++) { /* the 8 memo slots asked for at once: their misses overlap */
         for (int a = 0; a < 3; a++)
             ip[c][a] = nd->org[a] + ((c >> a) & 1) * s;
-        slot[c] = ism_point_slot(th->corners, CORNER_CACHE_BITS, ip[c]);
+        slot[c] = ism_point_slot(th->corners, ISM_CORNER_MEMO_BITS, ip[c]);
         __builtin_prefetch(slot[c], 1);
     }
     int miss[8], nmiss = 0;
@@ -964,11 +964,14 @@ static bool init_threads(build *b, int nthreads)
     if (!b->threads)
         return false;
     memset(b->threads, 0, (size_t)nthreads * sizeof *b->threads);
-    /* zeroed by writing (zeroed.h): a lookup reads its slot before it fills it. 2^16
-     * entries of 40 bytes: each thread's memo starts on a cache line of its own. */
-    size_t memo = (size_t)1 << CORNER_CACHE_BITS;
-    b->corner_memos = ism_zeroed_alloc(b->p->pool, (size_t)nthreads * memo,
-                                       sizeof *b->corner_memos, b->p->cost);
+    /* the caller's, or zeroed by writing (zeroed.h): a lookup reads its slot before it
+     * fills it. 2^16 entries of 40 bytes: each thread's memo starts on a cache line of its
+     * own. */
+    size_t memo = (size_t)1 << ISM_CORNER_MEMO_BITS;
+    b->corner_memos = b->p->corner_memos
+                          ? b->p->corner_memos
+                          : ism_zeroed_alloc(b->p->pool, (size_t)nthreads * memo,
+                                             sizeof *b->corner_memos, b->p->cost);
     if (!b->corner_memos)
         return false;
     /* the node memos (none on the scalar reference path, poly_options.h) */
@@ -1043,7 +1046,8 @@ static void free_threads(build *b, int nthreads, ism_octree_build_stats *st)
         ism_root_log_free(&th->roots);
     }
     free(b->threads);
-    free(b->corner_memos);
+    if (b->corner_memos != b->p->corner_memos)
+        free(b->corner_memos);
     free(b->root_memos);
     free(b->label_memos);
     free(b->pair_memos);

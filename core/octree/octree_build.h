@@ -111,6 +111,12 @@ typedef struct ism_octree_build_params {
                                          on to the polygonisation): as many as
                                          ism_pool_threads(pool), or `threads` when pool is
                                          NULL; or NULL for none */
+    struct ism_point_entry *corner_memos; /* the threads' memos of f and ∇f at node corners
+                                         (cell_cache.h ism_point_memo), 2^ISM_CORNER_MEMO_BITS
+                                         entries each, end to end, indexed by thread as
+                                         crease_memos: kept by the caller, so that the cells
+                                         and the next rounds' builds read what this build
+                                         evaluated; NULL: the build's own, freed with it */
 } ism_octree_build_params;
 
 typedef struct ism_octree_build_stats {

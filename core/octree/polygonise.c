@@ -21,6 +21,7 @@
 #include "core/octree/straddle.h"
 #include "core/octree/weld.h"
 #include "core/util/parallel.h"
+#include "core/util/zeroed.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -389,6 +390,7 @@ static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
     st->lifted_chords += cx->stats.lifted_chords;
     st->quiet_skips += cx->quiet_skips;
     st->tile_replays += cx->tile_replays;
+    st->corner_values += cx->corner_values;
     st->evals_point += cx->s.n_point;
     st->evals_gradient += cx->s.n_gradient;
     st->evals_interval += cx->s.n_interval;
@@ -425,6 +427,8 @@ typedef struct carry {
     ism_leaf_memo memo;
     ism_cell_cache *caches; /* each thread's memo (cell_cache.h), or NULL */
     int ncaches;
+    ism_point_entry *corners; /* the build's corner memos (octree_build.h corner_memos), or
+                                 NULL (none yet, or the scalar reference path) */
 } carry;
 
 /* Thread t's memo for this round: the last round's, or a new one (zeroed on pool). */
@@ -454,6 +458,20 @@ static void free_caches(carry *c)
     free(c->caches);
     c->caches = NULL;
     c->ncaches = 0;
+    free(c->corners);
+    c->corners = NULL;
+}
+
+/* The threads' corner memos for the build and the cells of a round: the last round's (the
+ * values are pure), or new ones zeroed on pool (the cost in *cost); none on the scalar
+ * reference path, which the tests compare the memos with. False when out of memory. */
+static bool round_corners(carry *c, const ism_poly_options *o, ism_pool *pool,
+                          ism_par_cost *cost)
+{
+    if (o->scalar_eval || c->corners)
+        return true;
+    size_t n = (size_t)ism_pool_threads(pool) << ISM_CORNER_MEMO_BITS;
+    return (c->corners = ism_zeroed_alloc(pool, n, sizeof *c->corners, cost)) != NULL;
 }
 
 /* The leaves of p->tree that emit what they emitted in the last round (c), when there was
@@ -575,6 +593,7 @@ static enum ism_poly_status polygonise_leaves(const ism_tape *f, const ism_poly_
         cx->parent = parent;
         cx->breaks = &breaks;
         cx->found = found;
+        cx->corners = c->corners ? c->corners + ((size_t)t << ISM_CORNER_MEMO_BITS) : NULL;
         cx->roots = roots;
         cx->stitch_tol = o->stitch_tol;
         /* corner fans only where no singular locus is known: beside a double curve they
@@ -707,6 +726,10 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
     if (!o->scalar_eval && ism_tape_has_kink(f) &&
         !(crease = ism_crease_memo_new(pool, ism_pool_threads(pool), &m.par)))
         return ISM_POLY_NO_MEMORY;
+    if (!round_corners(prev, o, pool, &m.par)) {
+        ism_crease_memo_free(crease);
+        return ISM_POLY_NO_MEMORY;
+    }
     ism_octree_build_params bp = {
         .tape = f,
         .min_depth = o->min_depth,
@@ -739,6 +762,7 @@ static enum ism_poly_status one_round(const ism_tape *f, const ism_poly_options 
         .roots = &found,
         .max_roots = o->max_memory / ROOT_MEMORY_SHARE / ISM_ROOT_BYTES,
         .crease_memos = crease,
+        .corner_memos = prev->corners,
     };
     memcpy(bp.flatness.box, o->box, sizeof bp.flatness.box);
     ism_octree_build_stats bs;
@@ -788,6 +812,7 @@ static void add_round_costs(ism_poly_stats *total, const ism_poly_stats *r)
     total->evals_point += r->evals_point;
     total->evals_gradient += r->evals_gradient;
     total->evals_interval += r->evals_interval;
+    total->corner_values += r->corner_values;
     for (int k = 0; k < ISM_PHASE_COUNT; k++) {
         total->time_ms[k] += r->time_ms[k];
         total->cpu_ms[k] += r->cpu_ms[k];
@@ -888,6 +913,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     stats->threads = threads;
     stats->evals_point = costs.evals_point;
     stats->evals_gradient = costs.evals_gradient;
+    stats->corner_values = costs.corner_values;
     stats->evals_interval = costs.evals_interval;
     memcpy(stats->time_ms, costs.time_ms, sizeof stats->time_ms);
     memcpy(stats->cpu_ms, costs.cpu_ms, sizeof stats->cpu_ms);
