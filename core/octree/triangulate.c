@@ -230,14 +230,18 @@ static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const 
     bool best_folds = false;
     double best_cos = HUGE_VAL; /* cos + 1 (face) + 2 (fold) may pass 3 */
     for (size_t c = 0; c < n; c++) {
+        /* a fan measured no better than the best so far is never chosen, and its faults
+         * only add: the rest of its measure is skipped (the choice is the full measure's) */
         double worst = -1;
-        for (size_t i = 1; i + 1 < n; i++) {
+        for (size_t i = 1; i + 1 < n && worst < best_cos; i++) {
             double w = min_angle_cos(q[c].p, q[(c + i) % n].p, q[(c + i + 1) % n].p);
             if (w > worst)
                 worst = w;
         }
-        if (fan_in_face(out, base, n, q[c].p, node))
+        if (worst < best_cos && fan_in_face(out, base, n, q[c].p, node))
             worst += 1; /* only when every corner's fan has one */
+        if (!(worst < best_cos))
+            continue;
         bool f = fan_folds(q, n, &q[c]);
         if (f)
             worst += 2; /* only when every corner's fan folds */
