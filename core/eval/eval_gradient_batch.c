@@ -112,6 +112,7 @@ INLINE void chain_partials(double *regs, const ism_instr *in, const double *g1v,
     for (int k = 1; k < 4; k++) {
         double *o = comp(regs, in->out, k);
         const double *a = comp(regs, in->a, k);
+        #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
             if (g1v)
                 k_chain(o + g * VL, g1v + g * VL, a + g * VL);
@@ -139,6 +140,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         for (int k = 0; k < 4; k++) {
             double *o = comp(regs, in->out, k);
             const double *a = comp(regs, in->a, k), *b = comp(regs, in->b, k);
+            #pragma GCC unroll 4
             for (size_t g = 0; g < ng; g++) {
                 if (in->op == ISM_OP_ADD_RR)
                     k_add(o + g * VL, a + g * VL, b + g * VL);
@@ -152,19 +154,23 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         for (int k = 1; k < 4; k++) {
             double *o = comp(regs, in->out, k);
             const double *a = comp(regs, in->a, k), *b = comp(regs, in->b, k);
+            #pragma GCC unroll 4
             for (size_t g = 0; g < ng; g++)
                 k_mul_d(o + g * VL, a + g * VL, bv + g * VL, av + g * VL, b + g * VL);
         }
+        #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++)
             k_mul(ov + g * VL, av + g * VL, bv + g * VL);
         return;
     case ISM_OP_DIV_RR:
+        #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++)
             k_div(ov + g * VL, av + g * VL, bv + g * VL);
         #pragma GCC unroll 4
         for (int k = 1; k < 4; k++) {
             double *o = comp(regs, in->out, k);
             const double *a = comp(regs, in->a, k), *b = comp(regs, in->b, k);
+            #pragma GCC unroll 4
             for (size_t g = 0; g < ng; g++)
                 k_div_d(o + g * VL, a + g * VL, ov + g * VL, b + g * VL, bv + g * VL);
         }
@@ -175,6 +181,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         for (int k = 0; k < 4; k++) {
             double *o = comp(regs, in->out, k);
             const double *a = comp(regs, in->a, k), *b = comp(regs, in->b, k);
+            #pragma GCC unroll 4
             for (size_t g = 0; g < ng; g++)
                 k_pick(o + g * VL, av + g * VL, bv + g * VL, a + g * VL, b + g * VL,
                        in->op == ISM_OP_MIN_RR);
@@ -183,12 +190,14 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
     case ISM_OP_CONST:
         #pragma GCC unroll 4
         for (int k = 0; k < 4; k++)
+            #pragma GCC unroll 4
             for (size_t g = 0; g < ng; g++)
                 k_fill(comp(regs, in->out, k) + g * VL, k ? 0.0 : in->imm);
         return;
     case ISM_OP_ADD_RC:
     case ISM_OP_MUL_RC: {
         v4d c = {in->imm, in->imm, in->imm, in->imm};
+        #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++)
             st(ov + g * VL, in->op == ISM_OP_ADD_RC ? ld(av + g * VL) + c : ld(av + g * VL) * c);
         chain_partials(regs, in, NULL, in->op == ISM_OP_ADD_RC ? 1.0 : in->imm, ng);
@@ -199,6 +208,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
     case ISM_OP_SUB_CR:
     case ISM_OP_DIV_RC: { /* g' one constant: ism_unary_chain's g and g' */
         v4d c = {in->imm, in->imm, in->imm, in->imm};
+        #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
             v4d a = ld(av + g * VL);
             st(ov + g * VL, in->op == ISM_OP_COPY  ? a
@@ -216,6 +226,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
     case ISM_OP_ABS: { /* |a|, g' = -1, +1 or 0 (a NaN: neither side, 0) */
         v4d zero = {0.0, 0.0, 0.0, 0.0}, one = {1.0, 1.0, 1.0, 1.0};
         v4i sign = {INT64_MIN, INT64_MIN, INT64_MIN, INT64_MIN};
+        #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
             v4d a = ld(av + g * VL);
             st(ov + g * VL, (v4d)((v4i)a & ~sign));
@@ -225,6 +236,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
     }
     case ISM_OP_SQUARE: {
         v4d two = {2.0, 2.0, 2.0, 2.0};
+        #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
             v4d a = ld(av + g * VL);
             st(ov + g * VL, a * a);
@@ -246,6 +258,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
                            instructions a lane on chmutov-quartic's x^4 */
         unsigned e = in->b;
         v4d nv = {(double)e, (double)e, (double)e, (double)e};
+        #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
             double p2[VL];
             ism_powi_chain_lanes(av + g * VL, e, ov + g * VL, p2, VL);
@@ -279,7 +292,9 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
  * arithmetic were most of a short batch's cost. Klein bottle's tape, callgrind, instructions
  * a point at 1 / 4 / 6 / 8 points: 2,457 / 618 / 532 / 401 -> 1,675 / 423 / 342 / 258; with
  * grad_step's loops over a register's four components unrolled too (its `#pragma GCC unroll
- * 4`s) 1,546 / 391 / 333 / 251. */
+ * 4`s) 1,546 / 391 / 333 / 251; with its loops over the groups unrolled up to 4 (GCC left 3
+ * and 4 groups rolled) at 10 / 12 / 16 / 32 points 367 / 313 / 272 / 230 -> 244 / 205 / 177 /
+ * 209 (6 and 8: 345 / 260). */
 __attribute__((target("avx2")))
 static void run_tape_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
 {
