@@ -304,18 +304,51 @@ static int smooth_tests(const search *s, worker *w, const ism_interval x[3], con
     return k == ISM_KRAWCZYK_UNIQUE ? UNIQUE : SMOOTH;
 }
 
-/* Whether ∇f excludes 0 on the cell x by the mean-value form of its parent P (pm: its model,
- * f smooth there): ∇f(p) + H(P)(X − p) round P's centre p, no evaluation. On the torus it
- * drops 560 of 968 children, most of which the child's own interval gradient (~1,900
- * instructions) would drop, at ~180 instructions a row. */
-static bool parent_excludes(const ism_dual_model *pm, const ism_interval x[3])
+/* The rows of the mean-value form of ∇f over a child X of a cell P with a model pm:
+ * ∇f(p) + H(P)(X − p) round P's centre p, no evaluation. Along each axis j a child's X − p
+ * is P's lower or upper half less p, so each product H(P)_ij (X_j − p_j) takes one of two
+ * values per axis: the 18 products are taken once for the eight children (at the first
+ * child that asks) instead of up to 9 per child, and each row is then summed in
+ * add_linear's order from the same products, bit for bit what that form gives per child. */
+typedef struct parent_rows {
+    const ism_dual_model *pm;
+    const ism_interval *lower, *upper; /* P's halves per axis */
+    bool ready;                        /* t taken */
+    ism_interval t[3][3][2];           /* [row i][axis j][upper half?]: H_ij (half_j − p_j) */
+} parent_rows;
+
+static void rows_take(parent_rows *r)
 {
-    if (!pm)
+    _Pragma("GCC unroll 3") for (int j = 0; j < 3; j++) {
+        ism_interval p = iv(r->pm->c[j], r->pm->c[j]);
+        ism_interval d[2] = { iv_sub(r->lower[j], p), iv_sub(r->upper[j], p) };
+        for (int i = 0; i < 3; i++) {
+            ism_interval h = r->pm->box.h[ism_dual_hess_at(i, j)];
+            r->t[i][j][0] = iv_mul(h, d[0]);
+            r->t[i][j][1] = iv_mul(h, d[1]);
+        }
+    }
+    r->ready = true;
+}
+
+/* Whether ∇f excludes 0 on P's child m (bit k: its upper half along axis k) by the
+ * mean-value form of P (r: its rows; NULL when P has no model, f not smooth there). On the
+ * torus it drops 560 of 968 children, most of which the child's own interval gradient
+ * (~1,900 instructions) would drop, at ~180 instructions a row. */
+static bool parent_excludes(parent_rows *r, unsigned m)
+{
+    if (!r)
         return false;
-    ism_interval dx[3];
-    for (int k = 0; k < 3; k++)
-        dx[k] = iv_sub(x[k], iv(pm->c[k], pm->c[k]));
-    return some_row_excludes(&pm->at, &pm->box, dx);
+    if (!r->ready)
+        rows_take(r);
+    _Pragma("GCC unroll 3") for (int i = 0; i < 3; i++) {
+        ism_interval row = r->pm->at.d[i];
+        for (int j = 0; j < 3; j++)
+            row = iv_add(row, r->t[i][j][(m >> j) & 1u]);
+        if (!holds0(row))
+            return true;
+    }
+    return false;
 }
 
 /* Taylor round a singular point for the children of a cell P with a model pm (lower and
@@ -482,16 +515,16 @@ static void certified_model(const search *s, worker *w, const ism_interval x[3],
     w->evals_jet++;
 }
 
-/* The tests of a cell that evaluate nothing beyond its F interval f (pm: its parent's
- * model, or NULL): SMOOTH for a certified segment (above; its model not built yet),
- * EXCLUDED, or OPEN. */
+/* The tests of a cell that evaluate nothing beyond its F interval f (r: its parent's rows,
+ * or NULL; m: which child it is): SMOOTH for a certified segment (above; its model not built
+ * yet), EXCLUDED, or OPEN. */
 static int screen(worker *w, const scell *c, const ism_interval x[3], ism_interval f,
-                  const ism_dual_model *pm)
+                  parent_rows *r, unsigned m)
 {
     w->visited++;
     if (holds_segment(c, x))
         return SMOOTH;
-    return !holds0(f) || parent_excludes(pm, x) ? EXCLUDED : OPEN;
+    return !holds0(f) || parent_excludes(r, m) ? EXCLUDED : OPEN;
 }
 
 /* Whether a cell screen left OPEN (f at its centre fc, NULL when not evaluated, and then q
@@ -783,11 +816,12 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     if (!pm) { /* no centre test: each child at once */
         for (int m = 0; m < 8; m++) {
             ism_interval x[3] = { bx[m], by[m], bz[m] };
-            int v = screen(w, &kids[m], x, f[m], NULL);
+            int v = screen(w, &kids[m], x, f[m], NULL, 0);
             finish(s, w, out, &kids[m], x, f[m], v, NULL, iv(0.0, 0.0), NULL, &km);
         }
         return;
     }
+    parent_rows rows = { .pm = pm, .lower = lower, .upper = upper, .ready = false };
     int v[8];
     ism_interval cx[8], cy[8], cz[8], fc[8], q = iv(0.0, 0.0);
     size_t lane[8], open = 0;
@@ -795,7 +829,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     for (int m = 0; m < 8; m++) {
         ism_interval x[3] = { bx[m], by[m], bz[m] };
         double c[3];
-        v[m] = screen(w, &kids[m], x, f[m], pm);
+        v[m] = screen(w, &kids[m], x, f[m], &rows, (unsigned)m);
         lane[m] = SIZE_MAX;
         if (v[m] != OPEN)
             continue;
@@ -932,7 +966,8 @@ static bool seed(search *s, level *l, vec *boxes)
     w->evals_interval++;
     ism_dual_model m;
     task_out out = { .oom = false };
-    finish(s, w, &out, &root, x, f, screen(w, &root, x, f, NULL), NULL, iv(0.0, 0.0), NULL, &m);
+    int v = screen(w, &root, x, f, NULL, 0);
+    finish(s, w, &out, &root, x, f, v, NULL, iv(0.0, 0.0), NULL, &m);
     return join(&out, l, boxes, true);
 }
 
