@@ -11,7 +11,7 @@
  *   of the cell), f(c) batched over the children where a guess says it may hold  ─▶ dropped
  *   ∂F/∂xi(X) ∌ 0 for some i, for every smooth piece of a min/max/abs kink ─▶ dropped
  *   (smooth cells only, c: X's own centre) f(c) + ∇F(X)·(X − c) ∌ 0, or with H the
- *   parent's H(P) (no evaluation), then the cell's own H(X):
+ *   cell's own H(X):
  *   ∇f(c) + H (X − c) ∌ 0 for some row,
  *   f(c) ∉ ½ (X − c)ᵀ H (X − c) (Taylor round a singular point of the cell),
  *   f(c) + ∇f(c)·(X − c) + ½ (X − c)ᵀ H (X − c) ∌ 0,
@@ -233,9 +233,9 @@ static bool some_row_excludes(const ism_ivgrad *at, const ism_ivjet *j, const is
     return false;
 }
 
-/* The tests on a jet j over a cell holding X (X's own, or its parent's: ξ in X lies in the
- * parent too, and interval arithmetic is inclusion-monotone, so a test the parent's wider
- * jet passes the cell's own passes as well), round X's centre c (gc: f and ∇f there,
+/* The tests on X's own jet j (a parent's would serve too, ξ in X lying in the parent, but
+ * interval arithmetic is inclusion-monotone, so a test the parent's wider jet passes the
+ * cell's own passes as well: smooth_tests), round X's centre c (gc: f and ∇f there,
  * dx = X − c): a row of ∇f's mean-value form, Taylor round a singular point, and f's
  * second-order form (dual_cert.h), whose width shrinks with the square of the cell, so near
  * a minimum of f off the surface (the torus's circle of minima inside the tube, where ∇f = 0
@@ -273,11 +273,19 @@ static void centre_at(const search *s, worker *w, const ism_interval x[3], ism_d
     w->evals_interval++;
 }
 
+/* Krawczyk's test on the cell x from its model m (∇f at the centre, the Hessian over x).
+ * Its own function: inlined into smooth_tests, GCC 12 takes m's members for 8-byte regions
+ * and rejects the call (-Wstringop-overread; a false report, m is always a whole model). */
+static __attribute__((noinline)) int krawczyk_of(const ism_interval x[3], const ism_dual_model *m)
+{
+    return ism_krawczyk(x, m->c, m->at.d, m->box.h, NULL);
+}
+
 /* The tests that need f smooth on the cell: mean-value forms of F and ∇F, the second-order
- * form of F, and Krawczyk (pm: the parent's model, or NULL). The cell's own model is built in
- * *m as they go: valid when the verdict is SMOOTH. */
+ * form of F, and Krawczyk. The cell's own model is built in *m as they go: valid when the
+ * verdict is SMOOTH. */
 static int smooth_tests(const search *s, worker *w, const ism_interval x[3], const ism_ivgrad *g,
-                        const ism_dual_model *pm, ism_dual_model *m)
+                        ism_dual_model *m)
 {
     ism_interval cx[3], dx[3];
     centre_at(s, w, x, m, cx);
@@ -285,20 +293,16 @@ static int smooth_tests(const search *s, worker *w, const ism_interval x[3], con
         dx[k] = iv_sub(x[k], cx[k]);
     if (!holds0(add_linear(m->at.v, g->d, dx)))
         return EXCLUDED;
-    /* The parent's jet (no evaluation) round the cell's own centre. Its row test is not
-     * parent_excludes' again: that one is round p, before ∇F(X) is evaluated; this one has
-     * ∇f at c (a point) and |x − c| ≤ h/2 where |x − p| reaches h (h: the cell's width). Since
-     * the centre test (children_quad) runs first, it drops 0 of the 160 cells that reach it
-     * on the torus, 126 of 2,682 on kummer-16-nodes, each sparing a jet. Its Taylor half is
-     * children_quad's test again for a cell whose f at c was evaluated there (same c, the
-     * form over a narrower dx): it dropped none of those (16 torus, 70 kummer-16-nodes). */
-    if (pm && jet_excludes(&m->at, &pm->box, dx))
-        return EXCLUDED;
+    /* The cell's own jet only. The parent's (no evaluation, round the cell's centre) drops no
+     * cell the own jet keeps (jet_excludes: inclusion-monotone); it only spared a jet, and
+     * cost more than it spared: 0 of the 160 cells reaching it dropped on the torus, 126 of
+     * 2,682 on kummer-16-nodes. Search instructions without it at E 0.0141 (bench_error mesh
+     * S 0.0141 10, callgrind): torus 2.67M -> 2.47M, kummer-16-nodes 69.8M -> 67.5M. */
     ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &m->box);
     w->evals_jet++;
     if (jet_excludes(&m->at, &m->box, dx))
         return EXCLUDED;
-    int k = ism_krawczyk(x, m->c, m->at.d, m->box.h, NULL);
+    int k = krawczyk_of(x, m);
     if (k == ISM_KRAWCZYK_EMPTY)
         return EXCLUDED;
     return k == ISM_KRAWCZYK_UNIQUE ? UNIQUE : SMOOTH;
@@ -365,8 +369,8 @@ static bool parent_excludes(parent_rows *r, unsigned m)
  * the form over the hull of every child's X − c (inclusion-monotone): an enclosure of f(c)
  * apart from q rules p out.
  *
- * It is the Taylor test of jet_excludes on P's jet, which smooth_tests reaches only after
- * the child's interval gradient and centre gradient (~1,700 instructions each on the torus).
+ * It is the Taylor test of jet_excludes on P's jet, before the child's interval gradient
+ * and centre gradient (~1,700 instructions each on the torus).
  * There, of the torus's 640 level-4 cells, the parent's rows (parent_excludes) drop 448 and
  * this test the other 192 but 16 (each of which its own jet drops): the search 3.51M → 2.77M
  * instructions. A cusp inside cells (test_singular_points.c) sees it at every level. */
@@ -528,10 +532,10 @@ static int screen(worker *w, const scell *c, const ism_interval x[3], ism_interv
 }
 
 /* Whether a cell screen left OPEN (f at its centre fc, NULL when not evaluated, and then q
- * its parent's children_quad; pm: its parent's model, or NULL) may hold a singular point;
+ * its parent's children_quad) may hold a singular point;
  * SMOOTH leaves the cell's model in *m. */
 static int classify(const search *s, worker *w, const ism_interval x[3], const ism_interval *fc,
-                    ism_interval q, const ism_dual_model *pm, ism_dual_model *m)
+                    ism_interval q, ism_dual_model *m)
 {
     if (fc && f_off_singular_taylor(*fc, q)) {
         w->centre_dropped++;
@@ -545,7 +549,7 @@ static int classify(const search *s, worker *w, const ism_interval x[3], const i
                             : ism_eval_interval_grad_kept(s->t, w->jw, x, &g);
     w->evals_interval++;
     if (nk == 0)
-        return grad_may_vanish(g.d) ? smooth_tests(s, w, x, &g, pm, m) : EXCLUDED;
+        return grad_may_vanish(g.d) ? smooth_tests(s, w, x, &g, m) : EXCLUDED;
     if (nk > SEARCH_MAX_SPLIT)
         return SURVIVES;
     return some_piece_may_vanish(s, w, x, nk) ? SURVIVES : EXCLUDED;
@@ -763,17 +767,17 @@ static void project_all(search *s, keyed_box *boxes, size_t n)
 }
 
 /* Finishes a cell c (box x, F interval f; v: screen's verdict; fc: f at its centre or NULL,
- * q: its parent's children_quad; pm: its parent's model, or NULL): classified when open,
+ * q: its parent's children_quad): classified when open,
  * then kept unless excluded, with its centre lines when it joins the frontier with a model
  * (m: scratch). A certified segment's cell gets its model here (the finest need none). */
 static void finish(search *s, worker *w, task_out *out, scell *c, const ism_interval x[3],
                    ism_interval f, int v, const ism_interval *fc, ism_interval q,
-                   const ism_dual_model *pm, ism_dual_model *m)
+                   ism_dual_model *m)
 {
     if (v == SMOOTH && (int)c->level < s->depth)
         certified_model(s, w, x, m);
     if (v == OPEN)
-        v = classify(s, w, x, fc, q, pm, m);
+        v = classify(s, w, x, fc, q, m);
     if (v == EXCLUDED)
         return;
     if (v == SMOOTH)
@@ -817,7 +821,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
         for (int m = 0; m < 8; m++) {
             ism_interval x[3] = { bx[m], by[m], bz[m] };
             int v = screen(w, &kids[m], x, f[m], NULL, 0);
-            finish(s, w, out, &kids[m], x, f[m], v, NULL, iv(0.0, 0.0), NULL, &km);
+            finish(s, w, out, &kids[m], x, f[m], v, NULL, iv(0.0, 0.0), &km);
         }
         return;
     }
@@ -852,7 +856,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     for (int m = 0; m < 8; m++) {
         ism_interval x[3] = { bx[m], by[m], bz[m] };
         const ism_interval *at = lane[m] == SIZE_MAX ? NULL : &fc[lane[m]];
-        finish(s, w, out, &kids[m], x, f[m], v[m], at, q, pm, &km);
+        finish(s, w, out, &kids[m], x, f[m], v[m], at, q, &km);
     }
 }
 
@@ -967,7 +971,7 @@ static bool seed(search *s, level *l, vec *boxes)
     ism_dual_model m;
     task_out out = { .oom = false };
     int v = screen(w, &root, x, f, NULL, 0);
-    finish(s, w, &out, &root, x, f, v, NULL, iv(0.0, 0.0), NULL, &m);
+    finish(s, w, &out, &root, x, f, v, NULL, iv(0.0, 0.0), &m);
     return join(&out, l, boxes, true);
 }
 
