@@ -440,8 +440,13 @@ static size_t halve_triangles(const dual *d, const side_miss *s, const uint32_t 
  * (missed_sides): each side's two triangles cut in two at a vertex on the side's midpoint's
  * foot (side_task), the new triangles measured like any. True when every one meets E (then
  * they stand in the mesh for the missed ones, and the round is the last); false otherwise,
- * the triangles as they were (the new vertices stay unused). Not with a crease, the grown
- * box's clip or isolated points' balls, whose own passes read the round's triangles. */
+ * the triangles as they were: the new vertices stay unused (dual.c's to_mesh drops them), the
+ * halves that passed keep their keys in d->passed (each names a new vertex, which no later
+ * triangle uses, so none is read again). Not with a crease, the grown box's clip or isolated
+ * points' balls, whose own passes read the round's triangles. Out of memory for its own
+ * buffers it falls back silently (false, d->nomem unset: the round marks the missed
+ * triangles' leaves as without it); measure_triangles running out sets d->nomem as
+ * everywhere else. */
 static bool split_sides(dual *d, const uint8_t *miss)
 {
     if (d->crease || d->inner || d->nballs)
