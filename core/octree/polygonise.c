@@ -221,10 +221,18 @@ static void measure_unflat(const phase2 *p, padded_ctx *pc, int32_t leaf,
         pc->unflat_worst = e;
 }
 
+/* Under max_error: leaf i may still be split (a later round follows and it is above
+ * depth.max). */
+static bool leaf_may_split(const phase2 *p, size_t i)
+{
+    return p->leaf_error && !p->last_round &&
+           p->tree->nodes[p->leaves[i]].level < p->o->max_depth;
+}
+
 /* Leaf i polygonised into out (its output from vertex v0 and triangle t0 on) and, under
  * max_error, cut along a CSG crease and measured into *e; *unresolved: ism_crease_unresolved's
- * verdict on its triangles, asked when the crease test applies (it then makes *e infinite:
- * the leaf is split) or fold_test is set. */
+ * verdict on its triangles, asked when they meet max_error and the crease test applies (it
+ * then makes *e infinite: the leaf is split) or fold_test is set. */
 static bool leaf_measured(phase2 *p, ism_cell_ctx *cx, size_t i, ism_cell_out *out, size_t v0,
                           size_t t0, bool fold_test, double *e, bool *unresolved)
 {
@@ -235,8 +243,7 @@ static bool leaf_measured(phase2 *p, ism_cell_ctx *cx, size_t i, ism_cell_out *o
     *unresolved = false;
     /* the crease test below may take the measuring's centroid gradients (not the
        straddle's: it measures moved vertices) */
-    bool crease_test = p->leaf_error && !p->last_round &&
-                       p->tree->nodes[p->leaves[i]].level < p->o->max_depth;
+    bool crease_test = leaf_may_split(p, i);
     bool ask = crease_test || fold_test;
     double(*cg)[3] = NULL, cg_stack[CENTROIDS_ON_STACK][3];
     if (ok && p->leaf_error && p->straddle > 0) {
@@ -255,7 +262,7 @@ static bool leaf_measured(phase2 *p, ism_cell_ctx *cx, size_t i, ism_cell_out *o
        no zero was proved within E of, test_polygonise_accuracy.c; marked in the last
        round, 6 leaves of the gyroid ball at E = 1e-4 within E by the closed forms were
        counted missed with an infinite worst distance) */
-    if (ok && ask && (fold_test || *e <= p->o->max_error))
+    if (ok && ask && *e <= p->o->max_error)
         *unresolved = ism_crease_unresolved(&cx->s, out, t0, p->o->max_error,
                                             (const double(*)[3])cg);
     if (crease_test && *unresolved && *e <= p->o->max_error)
@@ -284,18 +291,28 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
         bool unresolved, fold_test = p->leaf_error && !cx->cut_creases;
         bool ok = leaf_measured(p, cx, i, out, v0, t0, fold_test, &e, &unresolved);
         if (ok && fold_test && unresolved) {
-            /* where a locus is known (no crease cut, cell_ctx.h): the centre's fan split
-               along the crease leaves it unresolved, so the leaf is polygonised again with
-               the cut (fan and split fold where the crease runs round the fan's centre:
-               Barth's sextic at E 0.0259, 24 leaves split for 5 more rounds and 108
+            /* where a locus is known (no crease cut, cell_ctx.h): the centre's fan, split
+               along the crease, meets E but leaves it unresolved, so the leaf is polygonised
+               again with the cut (fan and split fold where the crease runs round the fan's
+               centre: Barth's sextic at E 0.0259, 24 leaves split for 5 more rounds and 108
                triangles turned in its mesh; cut everywhere, 104 instead of 24 leaves of
                its E 0.00389 mesh measured beyond E in round 1: a chord follows a crease
-               bending through a coarse leaf less well than the fan's crease points) */
+               bending through a coarse leaf less well than the fan's crease points). A fan
+               beyond E is split, or missed at depth.max, as it was: its cut never met E in
+               those runs (Barth, E 0.0259 / 0.00389 / 0.00109, depth.max 4..10) */
             out->nverts = v0, out->ntris = t0, out->nsegs = s0;
             cx->stats = before;
             cx->cut_creases = true;
             ok = leaf_measured(p, cx, i, out, v0, t0, false, &e, &unresolved);
             cx->cut_creases = false;
+            if (ok && !(e <= p->o->max_error) && !leaf_may_split(p, i)) {
+                /* nothing splits it: the fan, which met E, stands rather than a cut beyond
+                   it (Barth at E 0.00389, depth.max 5: 24 leaves' fans 0.0031 from f = 0,
+                   their cuts 0.0060) */
+                out->nverts = v0, out->ntris = t0, out->nsegs = s0;
+                cx->stats = before;
+                ok = leaf_measured(p, cx, i, out, v0, t0, false, &e, &unresolved);
+            }
         }
         err = (float)e;
         if (ok && !p->leaf_error)
