@@ -290,7 +290,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
 /* ng a constant in each case (the polygoniser's batches: a node's or a leaf's few points),
  * so that grad_step's loops over the groups unroll: the per-step loop control and address
  * arithmetic were most of a short batch's cost. Klein bottle's tape, callgrind, instructions
- * a point at 1 / 4 / 6 / 8 points: 2,457 / 618 / 532 / 401 -> 1,675 / 423 / 342 / 258; with
+ * a point at 1 / 4 / 6 / 8 points: 2,457 / 618 / 532 / 401 -> 1,676 / 423 / 343 / 259; with
  * grad_step's loops over a register's four components unrolled too (its `#pragma GCC unroll
  * 4`s) 1,546 / 391 / 333 / 251; with its loops over the groups unrolled up to 4 (GCC left 3
  * and 4 groups rolled) at 10 / 12 / 16 / 32 points 367 / 313 / 272 / 230 -> 244 / 205 / 177 /

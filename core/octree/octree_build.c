@@ -161,8 +161,9 @@ static const ism_tape *node_range(build *b, thread_state *th, const ism_node *nd
 }
 
 /* A node's corner misses are evaluated in one ism_sample_grad_batch from this many on (the
- * batched gradient's fixed cost per call loses below: Klein bottle's tape, callgrind, 702
- * instructions a point one at a time, 841 / 563 / 423 batched at 2 / 3 / 4 points). */
+ * batched gradient's fixed cost per call loses below: Klein bottle's tape through the sampler,
+ * callgrind, instructions a point at 1 / 2 / 3 / 4 points, one at a time 624 / 612 / 608 /
+ * 606, batched 1,665 / 850 / 579 / 442; main 95b3f52). */
 #define CORNER_BATCH_MIN 3
 
 /* f and ∇f at the node's corners, through the thread's memo (neighbours share corners). The
