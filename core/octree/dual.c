@@ -82,42 +82,16 @@ static void set_grid(dual *d, const double box[6], int depth)
 /* f and the unit gradients at the lattice points q[0..n) (n <= 27) into f, p, g (f 0 where
  * its sign is rounding noise: ism_sample_zero_by_rounding), through the point memo, as
  * neighbouring nodes share corners (a split's 27 points hold the parent's 8 and the 18 on
- * its faces and edges that the neighbours' splits sample too). The memo is looked up point
- * by point (a miss takes its slot at once, so the memo ends as ism_point_memo's one point
- * at a time leaves it, with the same evaluations counted), then the misses' f and ∇f are
- * taken in one batch (ism_sample_grad_batch: bit for bit ism_sample_grad's, for less). */
+ * its faces and edges that the neighbours' splits sample too): ism_point_memo_many, the memo
+ * as one point at a time leaves it, the misses' values in one batch. */
 static void sample_corners(dual *d, worker *w, const int32_t (*q)[3], size_t n, double *f,
                            double (*p)[3], double (*g)[3])
 {
-    ism_point_entry *slot[27];
-    uint64_t key[27];
-    size_t at[27], nm = 0;
-    double mp[27][3], mf[27], mg[27][3];
-    for (size_t j = 0; j < n; j++) {
+    uint64_t key[ISM_POINT_MEMO_MANY];
+    for (size_t j = 0; j < n; j++)
         for (int a = 0; a < 3; a++)
             p[j][a] = ism_grid_coord(&d->g, a, q[j][a]);
-        key[j] = ism_lattice_key(q[j]);
-        ism_point_entry *e = ism_point_slot(w->points, w->bits, q[j]);
-        if (e->key == key[j]) {
-            f[j] = e->f;
-            memcpy(g[j], e->g, sizeof g[j]);
-            continue;
-        }
-        e->key = key[j];
-        slot[nm] = e;
-        memcpy(mp[nm], p[j], sizeof mp[nm]);
-        at[nm++] = j;
-    }
-    ism_sample_grad_batch(&w->s, (const double (*)[3])mp, mf, mg, nm);
-    for (size_t k = 0; k < nm; k++) {
-        size_t j = at[k];
-        f[j] = mf[k];
-        memcpy(g[j], mg[k], sizeof g[j]);
-        if (slot[k]->key == key[j]) { /* not taken since by a later miss */
-            slot[k]->f = mf[k];
-            memcpy(slot[k]->g, mg[k], sizeof mg[k]);
-        }
-    }
+    ism_point_memo_many(w->points, w->bits, q, (const double (*)[3])p, n, &w->s, f, g, key);
     for (size_t j = 0; j < n; j++) {
         double gn = ism_normalise3(g[j]); /* 0 at a critical point: no agreement there */
         if (f[j] != 0 && ism_sample_zero_by_rounding(&w->s, p[j], f[j], gn, d->finest_step))

@@ -160,65 +160,23 @@ static const ism_tape *node_range(build *b, thread_state *th, const ism_node *nd
     return tape;
 }
 
-/* A node's corner misses are evaluated in one ism_sample_grad_batch from this many on (the
- * batched gradient's fixed cost per call loses below: Klein bottle's tape through the sampler,
- * callgrind, instructions a point at 1 / 2 / 3 / 4 points, one at a time 624 / 612 / 608 /
- * 606, batched 1,665 / 850 / 579 / 442; main 95b3f52). */
-#define CORNER_BATCH_MIN 3
-
-/* f and ∇f at the node's corners, through the thread's memo (neighbours share corners). The
- * memo is asked corner by corner, a miss taking its slot at once (a later corner of the node
- * mapped to that slot misses too), as one corner at a time would; the misses' values are
- * then evaluated together and stored in corner order (the last store to a slot is the one
- * one corner at a time leaves there). Every value is f's and ∇f's at the point, bit for bit
- * (ism_sample_grad_batch gives ism_sample_grad's). */
+/* f and ∇f at the node's corners, through the thread's memo (neighbours share corners;
+ * ism_point_memo_many: the memo ends as one corner at a time leaves it, every value f's and
+ * ∇f's at the point bit for bit). */
 static void node_corners(const ism_grid *g, thread_state *th, const ism_tape *tape,
                          const ism_node *nd, ism_corners *k)
 {
     int32_t s = ism_grid_cell_steps(g, nd->level);
     const ism_tape *saved = th->s.tape;
-    th->s.tape = tape;
+    th->s.tape = tape; /* the full tape and a shortened one agree inside the node */
     int32_t ip[8][3];
-    ism_point_entry *slot[8];
-    for (int c = 0; c < 8; c++) { /* the 8 memo slots asked for at once: their misses overlap */
-        for (int a = 0; a < 3; a++)
+    for (int c = 0; c < 8; c++)
+        for (int a = 0; a < 3; a++) {
             ip[c][a] = nd->org[a] + ((c >> a) & 1) * s;
-        slot[c] = ism_point_slot(th->corners, ISM_CORNER_MEMO_BITS, ip[c]);
-        __builtin_prefetch(slot[c], 1);
-    }
-    int miss[8], nmiss = 0;
-    for (int c = 0; c < 8; c++) {
-        for (int a = 0; a < 3; a++)
             k->p[c][a] = ism_grid_coord(g, a, ip[c][a]);
-        k->key[c] = ism_lattice_key(ip[c]);
-        if (slot[c]->key == k->key[c]) {
-            k->f[c] = slot[c]->f;
-            memcpy(k->g[c], slot[c]->g, sizeof k->g[c]);
-        } else {
-            slot[c]->key = k->key[c];
-            miss[nmiss++] = c;
         }
-    }
-    /* the full tape and a shortened one agree inside the node: either will do */
-    if (nmiss >= CORNER_BATCH_MIN) {
-        double p[8][3], f[8], gr[8][3];
-        for (int i = 0; i < nmiss; i++)
-            memcpy(p[i], k->p[miss[i]], sizeof p[i]);
-        ism_sample_grad_batch(&th->s, (const double (*)[3])p, f, gr, (size_t)nmiss);
-        for (int i = 0; i < nmiss; i++) {
-            k->f[miss[i]] = f[i];
-            memcpy(k->g[miss[i]], gr[i], sizeof gr[i]);
-        }
-    } else {
-        for (int i = 0; i < nmiss; i++)
-            k->f[miss[i]] = ism_sample_grad(&th->s, k->p[miss[i]], k->g[miss[i]]);
-    }
-    for (int i = 0; i < nmiss; i++) {
-        ism_point_entry *e = slot[miss[i]];
-        e->key = k->key[miss[i]];
-        e->f = k->f[miss[i]];
-        memcpy(e->g, k->g[miss[i]], sizeof e->g);
-    }
+    ism_point_memo_many(th->corners, ISM_CORNER_MEMO_BITS, (const int32_t (*)[3])ip,
+                        (const double (*)[3])k->p, 8, &th->s, k->f, k->g, k->key);
     k->memo = th->memo.roots ? &th->memo : NULL; /* none on the reference path */
     th->s.tape = saved;
 }
