@@ -442,17 +442,23 @@ static size_t halve_triangles(const dual *d, const side_miss *s, const uint32_t 
  * they stand in the mesh for the missed ones, and the round is the last); false otherwise,
  * the triangles as they were: the new vertices stay unused (dual.c's to_mesh drops them), the
  * halves that passed keep their keys in d->passed (each names a new vertex, which no later
- * triangle uses, so none is read again). Not with a crease, the grown box's clip or isolated
- * points' balls, whose own passes read the round's triangles. Out of memory for its own
- * buffers it falls back silently (false, d->nomem unset: the round marks the missed
- * triangles' leaves as without it); measure_triangles running out sets d->nomem as
- * everywhere else. */
+ * triangle uses, so none is read again). Not when the halves would take the triangles past
+ * max_triangles (the round's leaves split instead, and the next round's count stops the
+ * mesher), nor with a crease, the grown box's clip or isolated points' balls, whose own
+ * passes read the round's triangles. Out of memory for its own buffers it falls back
+ * silently (false, d->nomem unset: the round marks the missed triangles' leaves as without
+ * it); measure_triangles running out sets d->nomem as everywhere else. */
 static bool split_sides(dual *d, const uint8_t *miss)
 {
     if (d->crease || d->inner || d->nballs)
         return false;
     side_miss *s;
     size_t n = missed_sides(d, miss, &s), ns = n / 2, nt = d->nt, nn = nt + n, cap = nn;
+    if (n && nn > d->o->max_triangles) { /* the halves would pass the bound mesh_rounds
+                                            checked on the round's triangles */
+        free(s);
+        return false;
+    }
     if (!n)
         return false;
     uint64_t *keys = malloc(ns * sizeof *keys);
