@@ -998,6 +998,7 @@ static void forget(dual *d)
     keyed_free(&d->passed);
     keyed_free(&d->mid);
     keyed_free(&d->fans);
+    keyed_free(&d->sides);
     d->n = NULL;
     d->at = NULL;
     d->pos = NULL;
@@ -1010,6 +1011,7 @@ static void forget(dual *d)
     memset(&d->passed, 0, sizeof d->passed);
     memset(&d->mid, 0, sizeof d->mid);
     memset(&d->fans, 0, sizeof d->fans);
+    memset(&d->sides, 0, sizeof d->sides);
     d->bad = d->nomem = d->too_big = false;
     d->why = ISM_DUAL_WHY_NONE;
 }

@@ -413,10 +413,10 @@ static size_t missed_sides(dual *d, const uint8_t *miss, side_miss **out)
 }
 
 /* The round's triangles into tri, each one cut[t] names (a side s[cut[t]], its vertex
- * v0 + cut[t] / 2) as the two halves of that side, each with the third corner, in place;
+ * vid[cut[t] / 2]) as the two halves of that side, each with the third corner, in place;
  * the halves' indices into list. Returns how many halves. */
 static size_t halve_triangles(const dual *d, const side_miss *s, const uint32_t *cut,
-                              uint32_t v0, uint32_t *tri, uint32_t *list)
+                              const uint32_t *vid, uint32_t *tri, uint32_t *list)
 {
     size_t m = 0, nl = 0;
     for (size_t t = 0; t < d->nt; t++) {
@@ -426,7 +426,7 @@ static size_t halve_triangles(const dual *d, const side_miss *s, const uint32_t 
             continue;
         }
         int k = s[cut[t]].k;
-        uint32_t c = v0 + cut[t] / 2, a = u[k], b = u[(k + 1) % 3], o = u[(k + 2) % 3];
+        uint32_t c = vid[cut[t] / 2], a = u[k], b = u[(k + 1) % 3], o = u[(k + 2) % 3];
         uint32_t two[6] = {a, c, o, c, b, o};
         memcpy(&tri[3 * m], two, sizeof two);
         list[nl++] = (uint32_t)m;
@@ -436,13 +436,58 @@ static size_t halve_triangles(const dual *d, const side_miss *s, const uint32_t 
     return nl;
 }
 
+/* The vertex of each of the ns sides s[0], s[2], .. into vid: the one an earlier try made
+ * for the side's pair key (d->sides; a pure function of the side's ends, like the
+ * vertices), else one placed now on the pool (side_task) and kept. A try whose halves miss
+ * leaves its vertices unused; its round then splits a leaf at one end of each side, or, both
+ * ends at depth.max, the third corners' leaves, and the next round may try that same side
+ * again: it reuses the vertex rather than adding another (d->nv only grows, and tri_key's
+ * memo stops at 2^21 vertices).
+ * False when a vertex cannot be placed (Newton) or out of memory. */
+static bool side_vertices(dual *d, const side_miss *s, size_t ns, uint32_t *vid)
+{
+    uint64_t *keys = malloc(ns * sizeof *keys);
+    uint32_t *which = malloc(ns * sizeof *which);
+    double *at = malloc(3 * ns * sizeof *at);
+    size_t nk = 0;
+    bool ok = keys && which && at && keyed_reserve(&d->sides, ns) &&
+              ism_dual_reserve_vertices(d, ns);
+    for (size_t j = 0; ok && j < ns; j++) {
+        const double *known = keyed_get(&d->sides, s[2 * j].key);
+        if (known) {
+            vid[j] = (uint32_t)*known;
+            continue;
+        }
+        which[nk] = (uint32_t)j;
+        keys[nk++] = s[2 * j].key;
+    }
+    if (ok && nk) {
+        task_ctx job = {d, keys, at, nk};
+        ism_pool_for(d->pool, nk, side_task, &job, NULL);
+    }
+    for (size_t k = 0; ok && k < nk; k++)
+        ok = !isnan(at[3 * k]);
+    for (size_t k = 0; ok && k < nk; k++) {
+        memcpy(&d->pos[3 * d->nv], &at[3 * k], 3 * sizeof *at);
+        d->vleaf[d->nv] = -1; /* like a fan's centre: no leaf of its own */
+        d->vtwin[d->nv] = -1;
+        keyed_put(&d->sides, keys[k], (double)d->nv); /* reserved: cannot fail */
+        vid[which[k]] = (uint32_t)d->nv++;
+    }
+    free(keys);
+    free(which);
+    free(at);
+    return ok;
+}
+
 /* The last round's misses mended without splitting a leaf, where they are all near sides
  * (missed_sides): each side's two triangles cut in two at a vertex on the side's midpoint's
- * foot (side_task), the new triangles measured like any. True when every one meets E (then
- * they stand in the mesh for the missed ones, and the round is the last); false otherwise,
- * the triangles as they were: the new vertices stay unused (dual.c's to_mesh drops them), the
- * halves that passed keep their keys in d->passed (each names a new vertex, which no later
- * triangle uses, so none is read again). Not when the halves would take the triangles past
+ * foot (side_vertices), the new triangles measured like any. True when every one meets E
+ * (then they stand in the mesh for the missed ones, and the round is the last); false
+ * otherwise, the triangles as they were: the new vertices stay unused (dual.c's to_mesh
+ * drops them) and kept in d->sides for a retry of the same side, the halves that passed
+ * keep their keys in d->passed (read again only by a retry's halves, over the same
+ * vertices: the same answer). Not when the halves would take the triangles past
  * max_triangles (the round's leaves split instead, and the next round's count stops the
  * mesher), nor with a crease, the grown box's clip or isolated points' balls, whose own
  * passes read the round's triangles. Out of memory for its own buffers it falls back
@@ -461,30 +506,17 @@ static bool split_sides(dual *d, const uint8_t *miss)
     }
     if (!n)
         return false;
-    uint64_t *keys = malloc(ns * sizeof *keys);
-    double *at = malloc(3 * ns * sizeof *at);
-    uint32_t *tri = malloc(3 * nn * sizeof *tri), *list = malloc(2 * n * sizeof *list);
+    uint32_t *vid = malloc(ns * sizeof *vid);
+    /* list zeroed: GCC cannot see that halve_triangles fills what measure_triangles reads */
+    uint32_t *tri = malloc(3 * nn * sizeof *tri), *list = calloc(2 * n, sizeof *list);
     uint32_t *cut = malloc(nt * sizeof *cut); /* triangle t's side (s's index), or none */
     uint8_t *nmiss = malloc(2 * n);
-    bool ok = keys && at && tri && list && cut && nmiss && ism_dual_reserve_vertices(d, ns);
-    for (size_t j = 0; ok && j < ns; j++)
-        keys[j] = s[2 * j].key;
-    if (ok) {
-        task_ctx job = {d, keys, at, ns};
-        ism_pool_for(d->pool, ns, side_task, &job, NULL);
+    bool ok = vid && tri && list && cut && nmiss && side_vertices(d, s, ns, vid);
+    if (ok)
         memset(cut, 0xff, nt * sizeof *cut);
-    }
-    uint32_t v0 = (uint32_t)d->nv;
-    for (size_t j = 0; ok && j < n; j++) {
-        ok = !isnan(at[3 * (j / 2)]);
+    for (size_t j = 0; ok && j < n; j++)
         cut[s[j].t] = (uint32_t)j;
-    }
-    for (size_t j = 0; ok && j < ns; j++) {
-        memcpy(&d->pos[3 * d->nv], &at[3 * j], 3 * sizeof *at);
-        d->vleaf[d->nv] = -1; /* like a fan's centre: no leaf of its own */
-        d->vtwin[d->nv++] = -1;
-    }
-    size_t nl = ok ? halve_triangles(d, s, cut, v0, tri, list) : 0;
+    size_t nl = ok ? halve_triangles(d, s, cut, vid, tri, list) : 0;
     uint32_t *old = d->tri;
     size_t oldcap = d->capt;
     if (ok) {
@@ -503,8 +535,7 @@ static bool split_sides(dual *d, const uint8_t *miss)
     }
     free(ok ? old : tri);
     free(s);
-    free(keys);
-    free(at);
+    free(vid);
     free(list);
     free(cut);
     free(nmiss);

@@ -111,6 +111,7 @@ typedef struct dual {
     keyed passed;       /* triangles (tri_key) that met E */
     keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
     keyed fans;         /* quads (quad_key) cut as a fan: their centre vertex */
+    keyed sides;        /* sides (pair_key) a round tried to cut: their vertex (split_sides) */
     int ec0[12], ec1[12], ef[12][2]; /* the cube's edges: ends and faces (ism_cube_edge) */
     double shift;     /* vertices move at most this far along ∇f (straddle.h), or 0 */
     const ism_dual_ball *balls; /* round the isolated singular points (dual_balls.h) */
