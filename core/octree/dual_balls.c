@@ -224,17 +224,6 @@ bool ism_dual_balls_near(const ism_dual_ball *b, size_t n, const ism_dual_ball_c
 
 /* ---- edges of the mesh, by sorting ------------------------------------------------------ */
 
-typedef struct edge_ref {
-    uint64_t key; /* min << 32 | max */
-    uint32_t tri; /* 3 t + k: the edge from corner k to corner k + 1 of triangle t */
-} edge_ref;
-
-static int by_key(const void *a, const void *b)
-{
-    uint64_t x = ((const edge_ref *)a)->key, y = ((const edge_ref *)b)->key;
-    return (x > y) - (x < y);
-}
-
 /* The first ball whose limit holds p, or n when none does. */
 static size_t limit_ball(const ism_dual_ball *b, size_t n, const ism_dual_ball_cover *cv,
                          const double p[3])
@@ -255,7 +244,7 @@ static size_t limit_ball(const ism_dual_ball *b, size_t n, const ism_dual_ball_c
  * these, not the whole mesh: kummer-4-nodes 1e-3, 117M -> M instructions for the clip and
  * fans. */
 static bool sorted_edges(const ism_mesh *m, const ism_dual_ball *b, size_t n,
-                         const ism_dual_ball_cover *cv, edge_ref **e, size_t *ne)
+                         const ism_dual_ball_cover *cv, ism_edge_ref **e, size_t *ne)
 {
     uint8_t *near = malloc(m->nverts + 1);
     *e = malloc((3 * m->ntris + 1) * sizeof **e);
@@ -272,10 +261,10 @@ static bool sorted_edges(const ism_mesh *m, const ism_dual_ball *b, size_t n,
         for (int k = 0; k < 3; k++) {
             uint32_t u = m->tri[3 * t + k], w = m->tri[3 * t + (k + 1) % 3];
             if (near[u] || near[w])
-                (*e)[(*ne)++] = (edge_ref){ism_edge_key(u, w), (uint32_t)(3 * t + k)};
+                (*e)[(*ne)++] = (ism_edge_ref){ism_edge_key(u, w), (uint32_t)(3 * t + k)};
         }
     free(near);
-    qsort(*e, *ne, sizeof **e, by_key);
+    qsort(*e, *ne, sizeof **e, ism_edge_ref_order);
     return true;
 }
 
@@ -527,12 +516,10 @@ static enum ism_fan_status clip_triangle(clip *c, size_t t)
 /* The clip spheres: just beyond each ball's farthest rim vertex (the ends of the mesh's
  * boundary edges round it); BAD when a boundary vertex is near no ball (nothing marked:
  * no ball can help) or a rim reaches past its ball's limit (marked). */
-static enum ism_fan_status clip_radii(clip *c, const edge_ref *e, size_t ne)
+static enum ism_fan_status clip_radii(clip *c, const ism_edge_ref *e, size_t ne)
 {
     for (size_t i = 0; i < ne;) {
-        size_t j = i + 1;
-        while (j < ne && e[j].key == e[i].key)
-            j++;
+        size_t j = ism_edge_run_end(e, ne, i);
         if (j - i == 1) { /* a boundary edge: the rim of a hole */
             uint32_t ends[2] = {(uint32_t)(e[i].key >> 32), (uint32_t)e[i].key};
             for (int h = 0; h < 2; h++) {
@@ -782,15 +769,13 @@ static void unturn_cuts(clip *c, size_t kept)
 static enum ism_fan_status closed(const ism_mesh *m, const ism_dual_ball *b, size_t n,
                                    const ism_dual_ball_cover *cv)
 {
-    edge_ref *e;
+    ism_edge_ref *e;
     size_t ne;
     if (!sorted_edges(m, b, n, cv, &e, &ne))
         return ISM_FAN_NO_MEMORY;
     enum ism_fan_status st = ISM_FAN_OK;
     for (size_t i = 0; i < ne && st == ISM_FAN_OK;) {
-        size_t j = i + 1;
-        while (j < ne && e[j].key == e[i].key)
-            j++;
+        size_t j = ism_edge_run_end(e, ne, i);
         if (j - i != 2)
             st = ISM_FAN_BAD;
         i = j;
@@ -806,7 +791,7 @@ enum ism_fan_status ism_dual_balls_fan(ism_mesh *m, ism_sampler *s, const ism_du
     memset(shrink, 0, n);
     clip c = {.m = m, .s = s, .b = b, .n = n, .shrink = shrink, .cover = cv};
     c.r1 = calloc(n ? n : 1, sizeof *c.r1);
-    edge_ref *e = NULL;
+    ism_edge_ref *e = NULL;
     size_t ne = 0;
     enum ism_fan_status st =
         c.r1 && sorted_edges(m, b, n, cv, &e, &ne) ? ISM_FAN_OK : ISM_FAN_NO_MEMORY;

@@ -6,6 +6,7 @@
 #include "core/octree/dual_measure.h"
 #include "core/octree/dual_box.h"
 #include "core/octree/dual_crease.h"
+#include "core/octree/edge_keys.h"
 #include "core/octree/sample_dist.h"
 #include "core/octree/straddle.h"
 #include "core/util/vec3.h"
@@ -26,10 +27,11 @@ static bool add_tri(dual *d, uint32_t a, uint32_t b, uint32_t c)
     return true;
 }
 
-/* Vertices a and b in one key (+1: never 0), the same either way round. */
+/* Vertices a and b in one key (their edge key + 1: never 0, as the memos want), the same
+ * either way round. */
 static uint64_t pair_key(uint32_t a, uint32_t b)
 {
-    return (a < b ? (uint64_t)a << 32 | b : (uint64_t)b << 32 | a) + 1;
+    return ism_edge_key(a, b) + 1;
 }
 
 /* The midpoint of the pair key stands for into m. */
@@ -331,20 +333,6 @@ static int coarsest_open(const dual *d, size_t t, int m)
  * mesh's sides instead of a round's leaves, 4,284 -> 4,524 triangles. */
 #define SIDE_SPLIT_MAX 2.0
 
-/* One missed side of a triangle: its vertex pair's key and the triangle, edge k from
- * corner k. */
-typedef struct side_miss {
-    uint64_t key;
-    uint32_t t;
-    uint8_t k;
-} side_miss;
-
-static int by_side(const void *a, const void *b)
-{
-    const side_miss *x = a, *y = b;
-    return x->key != y->key ? (x->key < y->key ? -1 : 1) : (x->t > y->t) - (x->t < y->t);
-}
-
 /* m (a point near f = 0, within size of it) moved onto f = 0 by Newton and then as a leaf's
  * vertex is (place_vertex: the straddle move) into out; NaN there when Newton cannot
  * finish. A pure function of m, like the vertices. */
@@ -381,10 +369,10 @@ static void side_task(void *ctx, size_t k, int thread)
  * triangle missed on it too; how many (0: not so, or out of memory). edge_misses marks the
  * two ends of each edge beyond E and a centroid's miss marks all three, so a mask of two
  * bits is one edge's miss: 3 edge 0, 6 edge 1, 5 edge 2. */
-static size_t missed_sides(dual *d, const uint8_t *miss, side_miss **out)
+static size_t missed_sides(dual *d, const uint8_t *miss, ism_edge_ref **out)
 {
     static const int8_t EDGE_OF[8] = {-1, -1, -1, 0, -1, 2, 1, -1};
-    side_miss *s = NULL;
+    ism_edge_ref *s = NULL;
     size_t n = 0, cap = 0;
     double e = d->o->max_error;
     bool ok = true;
@@ -397,13 +385,13 @@ static size_t missed_sides(dual *d, const uint8_t *miss, side_miss **out)
         ok = k >= 0 && d->vleaf[a] >= 0 && d->vleaf[b] >= 0 &&
              mid_dist(d, a, b) <= SIDE_SPLIT_MAX * e && grow((void **)&s, &cap, n + 1, sizeof *s);
         if (ok)
-            s[n++] = (side_miss){pair_key(a, b), (uint32_t)t, (uint8_t)k};
+            s[n++] = (ism_edge_ref){ism_edge_key(a, b), (uint32_t)(3 * t + (size_t)k)};
     }
     ok = ok && n && n % 2 == 0;
     if (ok)
-        qsort(s, n, sizeof *s, by_side);
+        qsort(s, n, sizeof *s, ism_edge_ref_order);
     for (size_t j = 0; ok && j < n; j += 2)
-        ok = s[j].key == s[j + 1].key && !(j + 2 < n && s[j + 2].key == s[j].key);
+        ok = ism_edge_run_end(s, n, j) == j + 2;
     if (!ok) {
         free(s);
         return 0;
@@ -415,7 +403,7 @@ static size_t missed_sides(dual *d, const uint8_t *miss, side_miss **out)
 /* The round's triangles into tri, each one cut[t] names (a side s[cut[t]], its vertex
  * vid[cut[t] / 2]) as the two halves of that side, each with the third corner, in place;
  * the halves' indices into list. Returns how many halves. */
-static size_t halve_triangles(const dual *d, const side_miss *s, const uint32_t *cut,
+static size_t halve_triangles(const dual *d, const ism_edge_ref *s, const uint32_t *cut,
                               const uint32_t *vid, uint32_t *tri, uint32_t *list)
 {
     size_t m = 0, nl = 0;
@@ -425,7 +413,7 @@ static size_t halve_triangles(const dual *d, const side_miss *s, const uint32_t 
             memcpy(&tri[3 * m++], u, 3 * sizeof *u);
             continue;
         }
-        int k = s[cut[t]].k;
+        int k = (int)(s[cut[t]].tri % 3);
         uint32_t c = vid[cut[t] / 2], a = u[k], b = u[(k + 1) % 3], o = u[(k + 2) % 3];
         uint32_t two[6] = {a, c, o, c, b, o};
         memcpy(&tri[3 * m], two, sizeof two);
@@ -444,7 +432,7 @@ static size_t halve_triangles(const dual *d, const side_miss *s, const uint32_t 
  * again: it reuses the vertex rather than adding another (d->nv only grows, and tri_key's
  * memo stops at 2^21 vertices).
  * False when a vertex cannot be placed (Newton) or out of memory. */
-static bool side_vertices(dual *d, const side_miss *s, size_t ns, uint32_t *vid)
+static bool side_vertices(dual *d, const ism_edge_ref *s, size_t ns, uint32_t *vid)
 {
     uint64_t *keys = malloc(ns * sizeof *keys);
     uint32_t *which = malloc(ns * sizeof *which);
@@ -453,13 +441,14 @@ static bool side_vertices(dual *d, const side_miss *s, size_t ns, uint32_t *vid)
     bool ok = keys && which && at && keyed_reserve(&d->sides, ns) &&
               ism_dual_reserve_vertices(d, ns);
     for (size_t j = 0; ok && j < ns; j++) {
-        const double *known = keyed_get(&d->sides, s[2 * j].key);
+        uint64_t key = s[2 * j].key + 1; /* pair_key */
+        const double *known = keyed_get(&d->sides, key);
         if (known) {
             vid[j] = (uint32_t)*known;
             continue;
         }
         which[nk] = (uint32_t)j;
-        keys[nk++] = s[2 * j].key;
+        keys[nk++] = key;
     }
     if (ok && nk) {
         task_ctx job = {d, keys, at, nk};
@@ -497,7 +486,7 @@ static bool split_sides(dual *d, const uint8_t *miss)
 {
     if (d->crease || d->inner || d->nballs)
         return false;
-    side_miss *s;
+    ism_edge_ref *s;
     size_t n = missed_sides(d, miss, &s), ns = n / 2, nt = d->nt, nn = nt + n, cap = nn;
     if (n && nn > d->o->max_triangles) { /* the halves would pass the bound mesh_rounds
                                             checked on the round's triangles */
@@ -515,7 +504,7 @@ static bool split_sides(dual *d, const uint8_t *miss)
     if (ok)
         memset(cut, 0xff, nt * sizeof *cut);
     for (size_t j = 0; ok && j < n; j++)
-        cut[s[j].t] = (uint32_t)j;
+        cut[s[j].tri / 3] = (uint32_t)j;
     size_t nl = ok ? halve_triangles(d, s, cut, vid, tri, list) : 0;
     uint32_t *old = d->tri;
     size_t oldcap = d->capt;

@@ -21,6 +21,30 @@ static inline int ism_edge_key_order(const void *a, const void *b)
     return (x > y) - (x < y);
 }
 
+/* One triangle's edge by its key: the dual mesh's edges matched with their twins by sorting
+ * (dual_balls.c's boundary and closed checks, dual_measure.c's missed sides). */
+typedef struct ism_edge_ref {
+    uint64_t key; /* ism_edge_key of its ends */
+    uint32_t tri; /* 3 t + k: the edge from corner k to corner k + 1 of triangle t */
+} ism_edge_ref;
+
+/* By key, then by triangle: the same order on any libc's qsort. */
+static inline int ism_edge_ref_order(const void *a, const void *b)
+{
+    const ism_edge_ref *x = a, *y = b;
+    return x->key != y->key ? (x->key < y->key ? -1 : 1) : (x->tri > y->tri) - (x->tri < y->tri);
+}
+
+/* In refs e[0..n) sorted by key: the end of the run from i of e[i]'s key (the edge's
+ * triangles: j - i of them). */
+static inline size_t ism_edge_run_end(const ism_edge_ref *e, size_t n, size_t i)
+{
+    size_t j = i + 1;
+    while (j < n && e[j].key == e[i].key)
+        j++;
+    return j;
+}
+
 /* keys[0..n) sorted, each once; returns how many are left. */
 static inline size_t ism_edge_keys_unique(uint64_t *keys, size_t n)
 {
