@@ -10,6 +10,7 @@
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
+#include "core/util/u32_lists.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -259,69 +260,26 @@ static uint8_t obtuse_corners(const rm_pass *p, size_t t)
     return bits;
 }
 
-/* Edges {a, b}, a < b, as lists per vertex a: a handful of entries a vertex at most, so a
- * look-up is a short walk and an addition two writes (no hashing, nothing rebuilt as it
- * grows). */
-typedef struct edge_lists {
-    uint32_t *head;          /* per vertex: its newest entry, or UINT32_MAX */
-    uint32_t (*e)[2];        /* per entry: a's next entry (UINT32_MAX: none), b */
-    size_t n, cap;
-} edge_lists;
-
-static bool lists_init(edge_lists *l, size_t nverts)
+/* Edge {a, b} in set, the lists of ism_u32_lists keyed by the lower end (a handful of
+ * entries a vertex at most), valued by the higher. */
+static bool edge_add(ism_u32_lists *set, uint32_t a, uint32_t b)
 {
-    *l = (edge_lists){0};
-    if (!(l->head = malloc((nverts ? nverts : 1) * sizeof *l->head)))
-        return false;
-    memset(l->head, 0xff, nverts * sizeof *l->head);
-    return true;
-}
-
-static void lists_free(edge_lists *l)
-{
-    free(l->head);
-    free(l->e);
-}
-
-/* Adds {a, b}; false when out of memory. */
-static bool lists_add(edge_lists *l, uint32_t a, uint32_t b)
-{
-    uint32_t lo = a < b ? a : b, hi = a < b ? b : a;
-    if (l->n == l->cap) {
-        size_t cap = l->cap ? 2 * l->cap : 1024;
-        uint32_t(*e)[2] = realloc(l->e, cap * sizeof *e);
-        if (!e)
-            return false;
-        l->e = e;
-        l->cap = cap;
-    }
-    l->e[l->n][0] = l->head[lo];
-    l->e[l->n][1] = hi;
-    l->head[lo] = (uint32_t)l->n++;
-    return true;
-}
-
-/* {a, b} with a < b is in l. */
-static bool lists_has(const edge_lists *l, uint32_t a, uint32_t b)
-{
-    for (uint32_t i = l->head[a]; i != UINT32_MAX; i = l->e[i][0])
-        if (l->e[i][1] == b)
-            return true;
-    return false;
+    return ism_u32_lists_add(set, a < b ? a : b, a < b ? b : a);
 }
 
 /* The edges opposite a corner of a live triangle with a corner in near whose angle is not
- * acute or right (obtuse_corners) into set; false when out of memory (set then freed). An
- * edge whose angles opposite it, in both its triangles, are at most 90° fails not_delaunay:
- * sc cd + cc sd is a sum of products of non-negative numbers. On the presets' meshes most
- * are: the Delaunay test for an edge pushed first needs its quad found (rm_edge_triangles).
+ * acute or right (obtuse_corners) into set; false when out of memory or out of entry numbers
+ * (set then freed). An edge whose angles opposite it, in both its triangles, are at most 90°
+ * fails not_delaunay: sc cd + cc sd is a sum of products of non-negative numbers. On the
+ * presets' meshes most are: the Delaunay test for an edge pushed first needs its quad found
+ * (rm_edge_triangles).
  * (A sorted array and binary searches were 19% of the flips' instructions on the torus under
  * its default bound, the sort 6%; a hash set of edge keys, rebuilt each call, 13.1M of the
  * cube's 155M in its 0.37-cell box.) */
-static bool obtuse_edges(const rm_pass *p, const uint8_t *near, edge_lists *set)
+static bool obtuse_edges(const rm_pass *p, const uint8_t *near, ism_u32_lists *set)
 {
     const ism_mesh *m = p->r.m;
-    if (!lists_init(set, m->nverts))
+    if (!ism_u32_lists_init(set, m->nverts))
         return false;
     for (size_t t = 0; t < m->ntris; t++) {
         const uint32_t *v = m->tri + 3 * t;
@@ -329,8 +287,8 @@ static bool obtuse_edges(const rm_pass *p, const uint8_t *near, edge_lists *set)
             continue;
         uint8_t bits = p->r.dead[t] ? 0 : obtuse_corners(p, t);
         for (int k = 0; bits && k < 3; k++)
-            if ((bits >> k & 1) && !lists_add(set, v[k], v[(k + 1) % 3])) {
-                lists_free(set);
+            if ((bits >> k & 1) && !edge_add(set, v[k], v[(k + 1) % 3])) {
+                ism_u32_lists_free(set);
                 return false;
             }
     }
@@ -373,12 +331,12 @@ static uint8_t *seeded_corners(const rm_pass *p, const uint8_t *seed, uint32_t *
 
 /* Pushes the edges {v[k], v[k + 1]}, v[k] < v[k + 1], of triangle v, those in set only
  * when it is not NULL; false when out of memory. */
-static bool push_edges(edge_stack *s, const uint32_t *v, const edge_lists *set)
+static bool push_edges(edge_stack *s, const uint32_t *v, const ism_u32_lists *set)
 {
     static const int next[3] = {1, 2, 0};
     for (int k = 0; k < 3; k++) {
         uint32_t a = v[k], b = v[next[k]];
-        if (a < b && (!set || lists_has(set, a, b)) && !push(s, a, b))
+        if (a < b && (!set || ism_u32_lists_has(set, a, b)) && !push(s, a, b))
             return false;
     }
     return true;
@@ -389,7 +347,7 @@ size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok)
     const ism_mesh *m = p->r.m;
     edge_stack s = {0};
     size_t flips = 0, limit = ISM_RM_FLIPS_PER_TRIANGLE * m->ntris, nseeded;
-    edge_lists obtuse;
+    ism_u32_lists obtuse;
     uint32_t *seeded;
     /* only the edges of seeded triangles are asked of the set, and both triangles on such an
        edge have a seeded triangle's corner (NULL, out of memory: every edge pushed) */
@@ -409,7 +367,7 @@ size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok)
     }
     free(seeded);
     if (known)
-        lists_free(&obtuse);
+        ism_u32_lists_free(&obtuse);
     while (*ok && s.n && flips < limit) {
         uint32_t b = s.e[--s.n], a = s.e[--s.n];
         quad q;
