@@ -295,9 +295,9 @@ static bool obtuse_edges(const rm_pass *p, const uint8_t *near, ism_u32_lists *s
     return true;
 }
 
-/* The live triangles with a corner in seed, in order, into *list (how many: *n), and the
- * corners of those triangles into a new array (NULL when out of memory, *list then NULL
- * too): every triangle on an edge of a seeded triangle has one of them. */
+/* The live triangles with a corner in seed, in order, into *list (how many: *n; NULL when
+ * there are none), and the corners of those triangles into a new array: every triangle on an
+ * edge of a seeded triangle has one of them. NULL when out of memory (*list then NULL too). */
 static uint8_t *seeded_corners(const rm_pass *p, const uint8_t *seed, uint32_t **list,
                                size_t *n)
 {
@@ -352,10 +352,10 @@ size_t rm_flip_from(rm_pass *p, const uint8_t *seed, bool *ok)
     /* only the edges of seeded triangles are asked of the set, and both triangles on such an
        edge have a seeded triangle's corner (NULL, out of memory: every edge pushed) */
     uint8_t *near = seeded_corners(p, seed, &seeded, &nseeded);
-    bool known = near && obtuse_edges(p, near, &obtuse);
+    bool listed = near != NULL, known = listed && nseeded && obtuse_edges(p, near, &obtuse);
     free(near);
     *ok = true;
-    if (seeded) {
+    if (listed) { /* (none seeded: nothing to push) */
         for (size_t i = 0; i < nseeded && *ok; i++)
             *ok = push_edges(&s, m->tri + 3 * (size_t)seeded[i], known ? &obtuse : NULL);
     } else {
