@@ -5,8 +5,9 @@
  * the old way, cd is not already an edge, the smallest angle of the pair grows, cd's
  * midpoint lies no farther from f = 0 than the bound (max_error, or ab's own distance), and
  * the new centroids no farther than the old ones or the mesh's farthest before the pass. A
- * cap (an angle near 180°) has no normal to speak of: its bend is not asked, and the bound
- * is the largest of the quad's five edges. */
+ * cap (an angle near 180°) has no normal to speak of: a bend too large is forgiven when one
+ * of the old triangles is a cap (asked only then), and without max_error the bound is the
+ * largest of the quad's five edges. */
 #include "core/remesh/rm_bound.h"
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
@@ -53,7 +54,8 @@ static bool find_quad(const rm_pass *p, uint32_t a, uint32_t b, quad *q)
     q->cen[0][4] = q->cen[1][4] = 0;
     q->t1 = t[0];
     q->t2 = t[1];
-    /* the corner of each that is neither a nor b (a is before b in t[0], after it in t[1]) */
+    /* the corner of each that is neither a nor b (the XOR of its three corners with a and b,
+       whichever way round the triangle runs) */
     q->c = tri[3 * t[0]] ^ tri[3 * t[0] + 1] ^ tri[3 * t[0] + 2] ^ a ^ b;
     q->d = tri[3 * t[1]] ^ tri[3 * t[1] + 1] ^ tri[3 * t[1] + 2] ^ a ^ b;
     return q->c != q->d && q->c != a && q->c != b && q->d != a && q->d != b;
