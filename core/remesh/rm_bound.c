@@ -175,10 +175,10 @@ static void distances_chunk(rm_pass *p, const double (*x)[3], size_t n, double *
     ism_eval_gradient_batch(p->f, p->ws, px, py, pz, fv, g, n);
     if (!p->bounded) { /* rm_distance without a bound: one step's length */
         for (size_t i = 0; i < n; i++) {
-            double len = sqrt(ism_dot3(g[i], g[i]));
+            double len;
+            d[i] = rm_unbounded_distance(p, fv[i], g[i], &len);
             if (gn)
                 gn[i] = len;
-            d[i] = len > p->gthresh && isfinite(fv[i]) ? fabs(fv[i]) / len : INFINITY;
         }
         return;
     }

@@ -7,6 +7,9 @@
 #define ISM_RM_BOUND_H
 
 #include "core/remesh/rm_pass.h"
+#include "core/util/vec3.h"
+
+#include <math.h>
 
 /* A point whose first step is at most this share of the limit it is measured against (of
  * max_error when the limit is infinite) is measured by that step alone: the second is the
@@ -32,6 +35,18 @@
  * other use (a strict `<`, a different threshold, a max over values) decides as the measure
  * does or more strictly (sp_place.c's `< before` may refuse a move the measure would take). */
 double rm_bound_distance(rm_pass *p, const double x[3], double limit);
+
+/* Without a bound, the distance to f = 0 from a point where f is fv and ∇f is g: |f|/|∇f|,
+ * with |∇f| into *gn; INFINITY where |∇f| is at most gthresh or f is not finite. Every
+ * unbounded measure (rm_distance, rm_cbound_distance, rm_bound_distances) is this one, so
+ * they agree bit for bit. */
+static inline double rm_unbounded_distance(const rm_pass *p, double fv, const double g[3],
+                                           double *gn)
+{
+    double len = sqrt(ism_dot3(g, g));
+    *gn = len;
+    return len > p->gthresh && isfinite(fv) ? fabs(fv) / len : INFINITY;
+}
 
 /* d[i] = rm_distance(p, x[i]) for i < n, bit for bit (rm_bound_distance with an infinite
  * limit under a bound; |f|/|∇f| without one, with |∇f| into gn[i], 0 under a bound; gn may

@@ -1,6 +1,7 @@
 /* rm_cbound.c — per-triangle centroid measures kept between steps (rm_cbound.h). */
 #include "core/remesh/rm_cbound.h"
 
+#include "core/remesh/rm_bound.h"
 #include "core/util/vec3.h"
 
 #include <stdlib.h>
@@ -26,9 +27,7 @@ bool rm_cbound_open(rm_pass *p)
 double rm_cbound_distance(rm_pass *p, const double x[3], double *gn)
 {
     double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-    double len = sqrt(ism_dot3(g, g)); /* as rm_distance, bit for bit */
-    *gn = len;
-    return len > p->gthresh && isfinite(fv) ? fabs(fv) / len : INFINITY;
+    return rm_unbounded_distance(p, fv, g, gn); /* as rm_distance, bit for bit */
 }
 
 double *rm_cbound_fan(rm_pass *p, uint32_t v, const double x[3])

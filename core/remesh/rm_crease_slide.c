@@ -484,8 +484,8 @@ static bool merge_onto_crease(rm_pass *p, uint32_t v, uint32_t w, const crease_f
         !rm_merge_link_ok(r, &g))
         return false;
     double x[3], mid[3], grad[3];
-    for (int k = 0; k < 3; k++)
-        x[k] = mid[k] = 0.5 * (rm_pos(p, v)[k] + rm_pos(p, w)[k]);
+    rm_midpoint(rm_pos(p, v), rm_pos(p, w), mid);
+    memcpy(x, mid, sizeof x);
     crease_frame cf;
     bool framed = false;
     if (!to_crease(p, c->f, x, f->mean_edge, &cf, &framed) ||

@@ -38,14 +38,14 @@ double rm_distance(rm_pass *p, const double x[3])
 {
     if (p->bounded)
         return rm_bound_distance(p, x, INFINITY);
-    double g[3], fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-    double gn = sqrt(ism_dot3(g, g));
-    return gn > p->gthresh && isfinite(fv) ? fabs(fv) / gn : INFINITY;
+    double g[3], gn, fv = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+    return rm_unbounded_distance(p, fv, g, &gn);
 }
 
 double rm_midpoint_distance(rm_pass *p, const double *a, const double *b)
 {
-    double m[3] = {0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1]), 0.5 * (a[2] + b[2])};
+    double m[3];
+    rm_midpoint(a, b, m);
     return rm_distance(p, m);
 }
 
