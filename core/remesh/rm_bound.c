@@ -24,7 +24,9 @@
  * ones lose, x^2+y^2+z-0.5 (5) +0.15%, x^2+y^2-0.49 (4) +0.82%, x*x+y-z (3) +1.17%: one
  * evaluation there costs about what a lane's bookkeeping does. Tapes of 7 to 11 measured
  * with 7 against 12 (s23, 819d8fa): ding-dong (7) -2.7%, ellipsoid (8) -2.5%, steinmetz
- * (9) -3.8%, torus (10) -4.8%, steiner-roman (11) -8.2%. Every PLY byte-identical. */
+ * (9) -3.8%, torus (10) -4.8%, steiner-roman (11) -8.2%. Every PLY byte-identical. A fan's
+ * threshold only: rm_bound_distances, with no memo slots to find, batches every tape
+ * (measured at distances_chunk). */
 #define RM_FAN_BATCH_MIN_TAPE 6
 
 /* e's first step from f's value fv and gradient e->g at x (first_step evaluates them;
@@ -165,7 +167,15 @@ double rm_bound_distance(rm_pass *p, const double x[3], double limit)
 
 /* rm_bound_distances for at most RM_DISTANCES_CHUNK points: their first steps in one batch,
  * then the second steps those need (|s1| above RM_BOUND_ONE_STEP_SHARE × max_error, as
- * steps_at asks with an infinite limit) in another. */
+ * steps_at asks with an infinite limit) in another. Every tape and every count, one point
+ * included, goes through the batch: without a memo to look up, the batch beats
+ * ism_eval_gradient point by point even below RM_FAN_BATCH_MIN_TAPE. Measured against the
+ * point-by-point evaluation for tapes under 6 and for chunks of one point (revB 1; callgrind
+ * --quality good --threads 1, -e EXPR in the default box, ism_quality_pass inclusive,
+ * batched / point by point, meshes byte-identical): x*x+y-z (3), --max-error off, 13.51M /
+ * 13.72M (+1.6%); x^2+y^2-0.49 (4) 23.75M / 24.17M (+1.8%), off 78.34M / 79.18M (+1.1%);
+ * x^2+y^2+z-0.5 (5), off, 46.93M / 47.61M (+1.4%); one point point by point, cube +12.9k,
+ * helicoid -1.5k, sphere off +3.5k. */
 static void distances_chunk(rm_pass *p, const double (*x)[3], size_t n, double *d, double *gn)
 {
     double px[RM_DISTANCES_CHUNK], py[RM_DISTANCES_CHUNK], pz[RM_DISTANCES_CHUNK];
