@@ -161,10 +161,6 @@ double rm_bound_distance(rm_pass *p, const double x[3], double limit)
     return two_steps(p, x, limit, true, &s1, &s2) ? fabs(s1) + fabs(s2) : INFINITY;
 }
 
-/* Points rm_bound_distances evaluates in one call of the batched evaluator (its stack
- * arrays): two of its chunks. */
-#define RM_DISTANCES_CHUNK (2 * ISM_GRAD_BATCH)
-
 /* rm_bound_distances for at most RM_DISTANCES_CHUNK points: their first steps in one batch,
  * then the second steps those need (|s1| above RM_BOUND_ONE_STEP_SHARE × max_error, as
  * steps_at asks with an infinite limit) in another. Every tape and every count, one point

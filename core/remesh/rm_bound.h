@@ -55,6 +55,10 @@ static inline double rm_unbounded_distance(const rm_pass *p, double fv, const do
  * (points measured once, as the found mesh's: they would only push out what the moves will
  * ask again). */
 void rm_bound_distances(rm_pass *p, const double (*x)[3], size_t n, double *d, double *gn);
+/* Points rm_bound_distances evaluates in one call of the batched evaluator (its stack
+ * arrays): two of the evaluator's chunks. A caller gathering points hands them over in
+ * multiples of this (a shorter list's last chunk pays its bookkeeping for fewer lanes). */
+#define RM_DISTANCES_CHUNK (2 * ISM_GRAD_BATCH)
 
 /* An upper bound on the distance from x to f = 0, as far as the bound max_error needs one:
  * rm_bound_distance with limit max_error, and where it took one step (|f|/|∇f| at most half
