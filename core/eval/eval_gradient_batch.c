@@ -281,10 +281,13 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
     chain_partials(regs, in, g1, 0.0, ng);
 }
 
-/* The tape's steps over ng groups. */
-#define RUN_TAPE(NG)                                                                           \
-    for (size_t i = 0; i < t->len; i++)                                                        \
-    grad_step(&t->code[i], regs, trig, NG)
+/* The tape's steps over ng groups (inlined into each caller, so that a constant ng unrolls
+ * grad_step's loops over the groups). */
+INLINE void run_tape_n(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
+{
+    for (size_t i = 0; i < t->len; i++)
+        grad_step(&t->code[i], regs, trig, ng);
+}
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 /* ng a constant in each case (the polygoniser's batches: a node's or a leaf's few points),
@@ -299,11 +302,11 @@ __attribute__((target("avx2")))
 static void run_tape_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
 {
     switch (ng) {
-    case 1: RUN_TAPE(1); break;
-    case 2: RUN_TAPE(2); break;
-    case 3: RUN_TAPE(3); break;
-    case 4: RUN_TAPE(4); break;
-    default: RUN_TAPE(ng); break;
+    case 1: run_tape_n(t, regs, trig, 1); break;
+    case 2: run_tape_n(t, regs, trig, 2); break;
+    case 3: run_tape_n(t, regs, trig, 3); break;
+    case 4: run_tape_n(t, regs, trig, 4); break;
+    default: run_tape_n(t, regs, trig, ng); break;
     }
 }
 #define HAVE_AVX2_PATH 1
@@ -311,7 +314,7 @@ static void run_tape_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig,
 
 static void run_tape_base(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
 {
-    RUN_TAPE(ng);
+    run_tape_n(t, regs, trig, ng);
 }
 
 static void grad_chunk(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
