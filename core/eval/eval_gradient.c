@@ -67,16 +67,14 @@ static ism_dual dual_op(const ism_instr *in, const ism_dual *r, ism_trig_cache *
  * clone, two SSE2 ones elsewhere), so the bits are the scalar code's. */
 _Static_assert(sizeof(ism_dual) == sizeof(v4d), "ism_dual is v, d[0..2] in a row");
 
-#define INLINE static inline __attribute__((always_inline))
-
 INLINE v4d dld(const ism_dual *a)
 {
-    return ld((const double *)(const void *)a);
+    return v4_ld((const double *)(const void *)a);
 }
 
 INLINE void dst(ism_dual *o, v4d v)
 {
-    st((double *)(void *)o, v);
+    v4_st((double *)(void *)o, v);
 }
 
 INLINE v4d splat(double c)

@@ -27,8 +27,6 @@ static inline double *comp(double *regs, uint32_t r, int k)
     return regs + ((size_t)r * 4 + (size_t)k) * GL;
 }
 
-#define INLINE static inline __attribute__((always_inline))
-
 /* VL lanes as one value of GCC's vector extension (lanes4.h). */
 _Static_assert(sizeof(v4d) == VL * sizeof(double), "a group is one v4d");
 
@@ -46,62 +44,62 @@ INLINE v4d pick(v4i m, v4d a, v4d b)
 
 INLINE void k_add(double *o, const double *a, const double *b)
 {
-    st(o, ld(a) + ld(b));
+    v4_st(o, v4_ld(a) + v4_ld(b));
 }
 
 INLINE void k_sub(double *o, const double *a, const double *b)
 {
-    st(o, ld(a) - ld(b));
+    v4_st(o, v4_ld(a) - v4_ld(b));
 }
 
 INLINE void k_mul(double *o, const double *a, const double *b)
 {
-    st(o, ld(a) * ld(b));
+    v4_st(o, v4_ld(a) * v4_ld(b));
 }
 
 /* d(a b) = a' b + a b' (dual_step's order of terms) */
 INLINE void k_mul_d(double *o, const double *ad, const double *bv, const double *av,
                     const double *bd)
 {
-    st(o, ld(ad) * ld(bv) + ld(av) * ld(bd));
+    v4_st(o, v4_ld(ad) * v4_ld(bv) + v4_ld(av) * v4_ld(bd));
 }
 
 INLINE void k_div(double *o, const double *a, const double *b)
 {
-    st(o, ld(a) / ld(b));
+    v4_st(o, v4_ld(a) / v4_ld(b));
 }
 
 /* d(a / b) = (a' − (a / b) b') / b (dual_binary's) */
 INLINE void k_div_d(double *o, const double *ad, const double *q, const double *bd,
                     const double *bv)
 {
-    st(o, (ld(ad) - ld(q) * ld(bd)) / ld(bv));
+    v4_st(o, (v4_ld(ad) - v4_ld(q) * v4_ld(bd)) / v4_ld(bv));
 }
 
 /* min: a's component where a.v < b.v, else b's; max: where a.v > b.v */
 INLINE void k_pick(double *o, const double *av, const double *bv, const double *ak,
                    const double *bk, bool is_min)
 {
-    v4i m = is_min ? (v4i)(ld(av) < ld(bv)) : (v4i)(ld(av) > ld(bv));
-    st(o, pick(m, ld(ak), ld(bk)));
+    v4i m = is_min ? (v4i)(v4_ld(av) < v4_ld(bv)) : (v4i)(v4_ld(av) > v4_ld(bv));
+    v4_st(o, pick(m, v4_ld(ak), v4_ld(bk)));
 }
 
 /* the chain rule's partial g' a': 0 where g' is 0 (even where a' is not finite) */
 INLINE void k_chain(double *o, const double *g1, const double *a)
 {
-    v4d g = ld(g1);
-    st(o, keep(g * ld(a), (v4i)(g != 0.0)));
+    v4d g = v4_ld(g1);
+    v4_st(o, keep(g * v4_ld(a), (v4i)(g != 0.0)));
 }
 
 INLINE void k_chain_c(double *o, double g1, const double *a)
 {
     v4d g = {g1, g1, g1, g1};
-    st(o, keep(g * ld(a), (v4i)(g != 0.0)));
+    v4_st(o, keep(g * v4_ld(a), (v4i)(g != 0.0)));
 }
 
 INLINE void k_fill(double *o, double c)
 {
-    st(o, (v4d){c, c, c, c});
+    v4_st(o, (v4d){c, c, c, c});
 }
 
 /* The three partials of out = g(a) from per-lane g' (g1v) or one g' for all (g1c). */
@@ -199,7 +197,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         v4d c = {in->imm, in->imm, in->imm, in->imm};
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++)
-            st(ov + g * VL, in->op == ISM_OP_ADD_RC ? ld(av + g * VL) + c : ld(av + g * VL) * c);
+            v4_st(ov + g * VL, in->op == ISM_OP_ADD_RC ? v4_ld(av + g * VL) + c : v4_ld(av + g * VL) * c);
         chain_partials(regs, in, NULL, in->op == ISM_OP_ADD_RC ? 1.0 : in->imm, ng);
         return;
     }
@@ -210,8 +208,8 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         v4d c = {in->imm, in->imm, in->imm, in->imm};
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
-            v4d a = ld(av + g * VL);
-            st(ov + g * VL, in->op == ISM_OP_COPY  ? a
+            v4d a = v4_ld(av + g * VL);
+            v4_st(ov + g * VL, in->op == ISM_OP_COPY  ? a
                             : in->op == ISM_OP_NEG ? -a
                             : in->op == ISM_OP_SUB_CR ? c - a
                                                       : a / c);
@@ -228,9 +226,9 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         v4i sign = {INT64_MIN, INT64_MIN, INT64_MIN, INT64_MIN};
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
-            v4d a = ld(av + g * VL);
-            st(ov + g * VL, (v4d)((v4i)a & ~sign));
-            st(g1 + g * VL, pick((v4i)(a < zero), -one, keep(one, (v4i)(a > zero))));
+            v4d a = v4_ld(av + g * VL);
+            v4_st(ov + g * VL, (v4d)((v4i)a & ~sign));
+            v4_st(g1 + g * VL, pick((v4i)(a < zero), -one, keep(one, (v4i)(a > zero))));
         }
         break;
     }
@@ -238,9 +236,9 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         v4d two = {2.0, 2.0, 2.0, 2.0};
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
-            v4d a = ld(av + g * VL);
-            st(ov + g * VL, a * a);
-            st(g1 + g * VL, two * a);
+            v4d a = v4_ld(av + g * VL);
+            v4_st(ov + g * VL, a * a);
+            v4_st(g1 + g * VL, two * a);
         }
         break;
     }
@@ -262,7 +260,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         for (size_t g = 0; g < ng; g++) {
             double p2[VL];
             ism_powi_chain_lanes(av + g * VL, e, ov + g * VL, p2, VL);
-            st(g1 + g * VL, nv * (ld(p2) * ld(av + g * VL)));
+            v4_st(g1 + g * VL, nv * (v4_ld(p2) * v4_ld(av + g * VL)));
         }
         break;
     }

@@ -14,6 +14,7 @@
  * is padded to whole groups by repeating its last point. One-argument operations other than
  * the affine ones and squares take g, g' and g'' lane by lane (deriv_rules.h). */
 #include "core/eval/deriv_rules.h"
+#include "core/eval/lanes4.h"
 #include "core/eval/workspace.h"
 #include "core/util/cache_line.h"
 
@@ -23,11 +24,7 @@
 #define HL ISM_HESS_BATCH
 #define VL 4
 #define NG (HL / VL)
-#define INLINE static inline __attribute__((always_inline))
-
-#pragma GCC diagnostic ignored "-Wpsabi" /* v4d only passes between always_inline helpers */
-typedef double v4d __attribute__((vector_size(VL * sizeof(double))));
-typedef long long v4i __attribute__((vector_size(VL * sizeof(double))));
+_Static_assert(VL == 4, "a group of lanes is one v4d (lanes4.h)");
 
 /* One register of one group: value, gradient, Hessian (xx xy xz yy yz zz). */
 typedef struct hj {

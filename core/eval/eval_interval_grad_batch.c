@@ -21,6 +21,7 @@
  * batch is padded up to whole groups by repeating its last box. */
 #include "core/eval/interval_jet_ws.h"
 #include "core/eval/interval_ops.h"
+#include "core/eval/lanes4.h"
 #include "core/expr/tape.h"
 #include "core/util/cache_line.h"
 
@@ -28,11 +29,7 @@
 #include <string.h>
 
 #define VL ISM_IVG_VL
-#define INLINE static inline __attribute__((always_inline))
-
-#pragma GCC diagnostic ignored "-Wpsabi" /* v4d only passes between always_inline helpers */
-typedef double v4d __attribute__((vector_size(VL * sizeof(double))));
-typedef long long v4i __attribute__((vector_size(VL * sizeof(double))));
+_Static_assert(VL == 4, "a group of lanes is one v4d (lanes4.h)");
 typedef unsigned long long v4u __attribute__((vector_size(VL * sizeof(double))));
 
 /* An interval per lane. */

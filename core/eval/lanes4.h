@@ -1,24 +1,33 @@
-/* lanes4.h — four doubles as one value of GCC's vector extension, for the gradient
- * evaluators' always-inline steps: one AVX2 register in a function compiled for AVX2, a pair
- * of SSE2 ones in the x86-64 baseline; element by element the same IEEE operations as scalar
- * code, so a lane's bits are the scalar code's. Loads and stores through memcpy (no alignment
- * or aliasing assumption). */
+/* lanes4.h — four doubles as one value of GCC's vector extension, for the evaluators'
+ * always-inline steps: one AVX2 register in a function compiled for AVX2, a pair of SSE2 ones
+ * in the x86-64 baseline; element by element the same IEEE operations as scalar code, so a
+ * lane's bits are the scalar code's. Loads and stores through memcpy (no alignment or aliasing
+ * assumption).
+ *
+ * Rule for includers: a v4d is passed and returned only between INLINE (always-inline)
+ * helpers, never across a real call, so the AVX calling convention GCC warns about (-Wpsabi:
+ * "the ABI for passing parameters with 32-byte alignment has changed") never applies; the
+ * warning is off for every file that includes this header. */
 #ifndef ISM_LANES4_H
 #define ISM_LANES4_H
 
-#pragma GCC diagnostic ignored "-Wpsabi" /* v4d is only passed between always_inline helpers:
-                                             no call ever uses the AVX return convention */
+#pragma GCC diagnostic ignored "-Wpsabi"
+
+/* The evaluators' helpers: inlined into each caller, so that one compiled for AVX2 keeps its
+ * v4d values in AVX2 registers. */
+#define INLINE static inline __attribute__((always_inline))
+
 typedef double v4d __attribute__((vector_size(4 * sizeof(double))));
 typedef long long v4i __attribute__((vector_size(4 * sizeof(double))));
 
-static inline __attribute__((always_inline)) v4d ld(const double *p)
+INLINE v4d v4_ld(const double *p)
 {
     v4d v;
     __builtin_memcpy(&v, p, sizeof v);
     return v;
 }
 
-static inline __attribute__((always_inline)) void st(double *p, v4d v)
+INLINE void v4_st(double *p, v4d v)
 {
     __builtin_memcpy(p, &v, sizeof v);
 }
