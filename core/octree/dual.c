@@ -11,6 +11,7 @@
 #include "core/octree/dual_tree.h"
 #include "core/octree/dual_classify.h"
 #include "core/octree/dual_measure.h"
+#include "core/octree/dual_sides.h"
 #include "core/octree/dual_walk.h"
 #include "core/eval/interval_jet.h"
 #include "core/octree/cell_cache.h"
@@ -899,6 +900,25 @@ bool ism_dual_wanted(const ism_tape *f, const ism_poly_options *o)
     return ism_dual_declined_before(f, &asked) == ISM_DUAL_WHY_NONE;
 }
 
+/* The round's triangles measured; where every miss is a side just past E those sides are cut
+ * (dual_sides.h: nothing to mark), else the leaves round the misses are marked
+ * (ism_dual_mark_misses). Returns the leaves marked; the misses at max_depth into *missed. */
+static size_t mark_round(dual *d, uint64_t *missed)
+{
+    *missed = 0;
+    uint8_t *miss = malloc(d->nt ? d->nt : 1);
+    if (!miss) {
+        d->nomem = true;
+        return 0;
+    }
+    ism_dual_measure_triangles(d, NULL, d->nt, miss);
+    size_t marked = 0;
+    if (!d->nomem && !ism_dual_split_sides(d, miss))
+        marked = ism_dual_mark_misses(d, miss, missed);
+    free(miss);
+    return marked;
+}
+
 static enum ism_dual_status mesh_rounds(dual *d, ism_mesh *mesh, ism_dual_stats *st)
 {
     int32_t root;
@@ -947,7 +967,7 @@ static enum ism_dual_status mesh_rounds(dual *d, ism_mesh *mesh, ism_dual_stats 
             return st->declined = d->why, ISM_DUAL_NOT_APPLICABLE;
         if (d->nt > d->o->max_triangles)
             return ISM_DUAL_TOO_BIG;
-        size_t marked = ism_dual_mark_misses(d, &st->missed);
+        size_t marked = mark_round(d, &st->missed);
         if (!d->nomem && !marked && !st->missed && d->inner)
             marked = ism_dual_mark_cut_misses(d, &st->missed);
         if (d->crease)

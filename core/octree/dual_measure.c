@@ -6,7 +6,6 @@
 #include "core/octree/dual_measure.h"
 #include "core/octree/dual_box.h"
 #include "core/octree/dual_crease.h"
-#include "core/octree/edge_keys.h"
 #include "core/octree/sample_dist.h"
 #include "core/octree/straddle.h"
 #include "core/util/vec3.h"
@@ -27,21 +26,6 @@ static bool add_tri(dual *d, uint32_t a, uint32_t b, uint32_t c)
     return true;
 }
 
-/* Vertices a and b in one key (their edge key + 1: never 0, as the memos want), the same
- * either way round. */
-static uint64_t pair_key(uint32_t a, uint32_t b)
-{
-    return ism_edge_key(a, b) + 1;
-}
-
-/* The midpoint of the pair key stands for into m. */
-static void pair_mid(const dual *d, uint64_t key, double m[3])
-{
-    uint32_t a = (uint32_t)((key - 1) >> 32), b = (uint32_t)(key - 1);
-    for (int k = 0; k < 3; k++)
-        m[k] = 0.5 * (d->pos[3 * a + k] + d->pos[3 * b + k]);
-}
-
 /* The distance to f = 0 (ism_dual_dist) of the midpoint of the pair key stands for. */
 static double pair_dist(dual *d, worker *w, uint64_t key)
 {
@@ -54,7 +38,7 @@ static double pair_dist(dual *d, worker *w, uint64_t key)
  * when the memo could not keep it. A pair is measured once: a mesh edge is asked for by both
  * its triangles, a quad's diagonal when it is chosen, and vertices keep their positions from
  * round to round. */
-static double mid_dist(dual *d, uint32_t a, uint32_t b)
+double ism_dual_mid_dist(dual *d, uint32_t a, uint32_t b)
 {
     uint64_t key = pair_key(a, b);
     const double *known = keyed_get(&d->mid, key);
@@ -130,7 +114,8 @@ static int edge_misses(dual *d, size_t t, const double *dist)
 {
     int miss = 0;
     for (int k = 0; k < 3; k++) {
-        double m = dist ? dist[k] : mid_dist(d, d->tri[3 * t + k], d->tri[3 * t + (k + 1) % 3]);
+        double m = dist ? dist[k]
+                        : ism_dual_mid_dist(d, d->tri[3 * t + k], d->tri[3 * t + (k + 1) % 3]);
         if (!(m <= d->o->max_error))
             miss |= 1 << k | 1 << (k + 1) % 3;
     }
@@ -217,7 +202,7 @@ static int clip_of(const dual *d, size_t t)
  * (edge_misses, else centroid_task; 0: within E). Triangles that met E in an earlier round
  * (d->passed) read 0 unmeasured; the rest have their edges, then the centroids of those whose
  * edges pass, measured on the pool, and are remembered when they pass. */
-static void measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *miss)
+void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *miss)
 {
     size_t np = 0, nc = 0;
     uint32_t *open = malloc((n ? n : 1) * sizeof *open);
@@ -319,232 +304,10 @@ static int coarsest_open(const dual *d, size_t t, int m)
     return top;
 }
 
-/* A side is split (split_sides) only while its midpoint lies within this many E of f = 0.
- * Its halves sag a quarter as far (a chord's sag grows with its length squared): under the
- * straddle move a side 2 E off sags 2.9 E, its halves 0.73 E, within E with room to spare;
- * a side farther off is an early round's, and its halves' triangles could be worse than the
- * round's finer leaves. Measured (bench_error mesh S E 10, one thread, triangles and rounds):
- * the sphere at E 0.0141 (the bench's 1e-2 setting) missed on nothing but twelve sides
- * between level-3 leaves at 1.023 E (feet 0.46 apart: the radial foot of a centre 0.82 from
- * the origin spreads the leaves' spacing 0.375 by 1 / 0.82), a whole second round (24 leaves
- * split, 2.1M of its 4.8M instructions, 456 triangles) for twelve edges: now 384 triangles,
- * none; the torus at 0.0141 missed on twelve sides at 1.55-1.59 E: 1,144 -> 1,008 triangles
- * and no round at 1.75 to 2.5 (1.5: unchanged); at 3 the sphere at 1.3e-3 split its first
- * mesh's sides instead of a round's leaves, 4,284 -> 4,524 triangles. */
-#define SIDE_SPLIT_MAX 2.0
-
-/* m (a point near f = 0, within size of it) moved onto f = 0 by Newton and then as a leaf's
- * vertex is (place_vertex: the straddle move) into out; NaN there when Newton cannot
- * finish. A pure function of m, like the vertices. */
-static void vertex_onto(dual *d, worker *w, double m[3], double size, double out[3])
-{
-    double q[3];
-    if (!ism_dual_newton_onto(w, m, size)) {
-        out[0] = out[1] = out[2] = NAN;
-        return;
-    }
-    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q, NULL))
-        memcpy(m, q, 3 * sizeof *m);
-    memcpy(out, m, 3 * sizeof *m);
-}
-
-/* Task k (job: in the pair keys, out the points): the midpoint of the pair as a vertex
- * (vertex_onto, within the pair's length), as fan_task makes a fan's centre. */
-static void side_task(void *ctx, size_t k, int thread)
-{
-    task_ctx *job = ctx;
-    dual *d = job->d;
-    worker *w = &d->w[thread];
-    uint64_t key = ((const uint64_t *)job->in)[k];
-    uint32_t a = (uint32_t)((key - 1) >> 32), b = (uint32_t)(key - 1);
-    double m[3], *out = &((double *)job->out)[3 * k];
-    pair_mid(d, key, m);
-    double size = ism_dist3(&d->pos[3 * (size_t)a], &d->pos[3 * (size_t)b]);
-    vertex_onto(d, w, m, size, out);
-}
-
-/* The misses of a round (miss[t], measure_triangles') as missed sides into *out (sorted by
- * key, two triangles each), when every missed triangle missed on one edge alone, an edge
- * between two leaves' vertices (no fan's centre) within SIDE_SPLIT_MAX E whose other
- * triangle missed on it too; how many (0: not so, or out of memory). edge_misses marks the
- * two ends of each edge beyond E and a centroid's miss marks all three, so a mask of two
- * bits is one edge's miss: 3 edge 0, 6 edge 1, 5 edge 2. */
-static size_t missed_sides(dual *d, const uint8_t *miss, ism_edge_ref **out)
-{
-    static const int8_t EDGE_OF[8] = {-1, -1, -1, 0, -1, 2, 1, -1};
-    ism_edge_ref *s = NULL;
-    size_t n = 0, cap = 0;
-    double e = d->o->max_error;
-    bool ok = true;
-    *out = NULL;
-    for (size_t t = 0; ok && t < d->nt; t++) {
-        if (!miss[t])
-            continue;
-        int k = EDGE_OF[miss[t] & 7];
-        uint32_t a = k < 0 ? 0 : d->tri[3 * t + k], b = k < 0 ? 0 : d->tri[3 * t + (k + 1) % 3];
-        ok = k >= 0 && d->vleaf[a] >= 0 && d->vleaf[b] >= 0 &&
-             mid_dist(d, a, b) <= SIDE_SPLIT_MAX * e && grow((void **)&s, &cap, n + 1, sizeof *s);
-        if (ok)
-            s[n++] = (ism_edge_ref){ism_edge_key(a, b), (uint32_t)(3 * t + (size_t)k)};
-    }
-    ok = ok && n && n % 2 == 0;
-    if (ok)
-        qsort(s, n, sizeof *s, ism_edge_ref_order);
-    for (size_t j = 0; ok && j < n; j += 2)
-        ok = ism_edge_run_end(s, n, j) == j + 2;
-    if (!ok) {
-        free(s);
-        return 0;
-    }
-    *out = s;
-    return n;
-}
-
-/* The round's triangles into tri, each one cut[t] names (a side s[cut[t]], its vertex
- * vid[cut[t] / 2]) as the two halves of that side, each with the third corner, in place;
- * the halves' indices into list. Returns how many halves. */
-static size_t halve_triangles(const dual *d, const ism_edge_ref *s, const uint32_t *cut,
-                              const uint32_t *vid, uint32_t *tri, uint32_t *list)
-{
-    size_t m = 0, nl = 0;
-    for (size_t t = 0; t < d->nt; t++) {
-        const uint32_t *u = &d->tri[3 * t];
-        if (cut[t] == UINT32_MAX) {
-            memcpy(&tri[3 * m++], u, 3 * sizeof *u);
-            continue;
-        }
-        int k = (int)(s[cut[t]].tri % 3);
-        uint32_t c = vid[cut[t] / 2], a = u[k], b = u[(k + 1) % 3], o = u[(k + 2) % 3];
-        uint32_t two[6] = {a, c, o, c, b, o};
-        memcpy(&tri[3 * m], two, sizeof two);
-        list[nl++] = (uint32_t)m;
-        list[nl++] = (uint32_t)m + 1;
-        m += 2;
-    }
-    return nl;
-}
-
-/* The vertex of each of the ns sides s[0], s[2], .. into vid: the one an earlier try made
- * for the side's pair key (d->sides; a pure function of the side's ends, like the
- * vertices), else one placed now on the pool (side_task) and kept. A try whose halves miss
- * leaves its vertices unused; its round then splits a leaf at one end of each side, or, both
- * ends at depth.max, the third corners' leaves, and the next round may try that same side
- * again: it reuses the vertex rather than adding another (d->nv only grows, and tri_key's
- * memo stops at 2^21 vertices).
- * False when a vertex cannot be placed (Newton) or out of memory. */
-static bool side_vertices(dual *d, const ism_edge_ref *s, size_t ns, uint32_t *vid)
-{
-    uint64_t *keys = malloc(ns * sizeof *keys);
-    uint32_t *which = malloc(ns * sizeof *which);
-    double *at = malloc(3 * ns * sizeof *at);
-    size_t nk = 0;
-    bool ok = keys && which && at && keyed_reserve(&d->sides, ns) &&
-              ism_dual_reserve_vertices(d, ns);
-    for (size_t j = 0; ok && j < ns; j++) {
-        uint64_t key = s[2 * j].key + 1; /* pair_key */
-        const double *known = keyed_get(&d->sides, key);
-        if (known) {
-            vid[j] = (uint32_t)*known;
-            continue;
-        }
-        which[nk] = (uint32_t)j;
-        keys[nk++] = key;
-    }
-    if (ok && nk) {
-        task_ctx job = {d, keys, at, nk};
-        ism_pool_for(d->pool, nk, side_task, &job, NULL);
-    }
-    for (size_t k = 0; ok && k < nk; k++)
-        ok = !isnan(at[3 * k]);
-    for (size_t k = 0; ok && k < nk; k++) {
-        memcpy(&d->pos[3 * d->nv], &at[3 * k], 3 * sizeof *at);
-        d->vleaf[d->nv] = -1; /* like a fan's centre: no leaf of its own */
-        d->vtwin[d->nv] = -1;
-        keyed_put(&d->sides, keys[k], (double)d->nv); /* reserved: cannot fail */
-        vid[which[k]] = (uint32_t)d->nv++;
-    }
-    free(keys);
-    free(which);
-    free(at);
-    return ok;
-}
-
-/* The last round's misses mended without splitting a leaf, where they are all near sides
- * (missed_sides): each side's two triangles cut in two at a vertex on the side's midpoint's
- * foot (side_vertices), the new triangles measured like any. True when every one meets E
- * (then they stand in the mesh for the missed ones, and the round is the last); false
- * otherwise, the triangles as they were: the new vertices stay unused (dual.c's to_mesh
- * drops them) and kept in d->sides for a retry of the same side, the halves that passed
- * keep their keys in d->passed (read again only by a retry's halves, over the same
- * vertices: the same answer). Not when the halves would take the triangles past
- * max_triangles (the round's leaves split instead, and the next round's count stops the
- * mesher), nor with a crease, the grown box's clip or isolated points' balls, whose own
- * passes read the round's triangles. Out of memory for its own buffers it falls back
- * silently (false, d->nomem unset: the round marks the missed triangles' leaves as without
- * it); measure_triangles running out sets d->nomem as everywhere else. */
-static bool split_sides(dual *d, const uint8_t *miss)
-{
-    if (d->crease || d->inner || d->nballs)
-        return false;
-    ism_edge_ref *s;
-    size_t n = missed_sides(d, miss, &s), ns = n / 2, nt = d->nt, nn = nt + n, cap = nn;
-    if (n && nn > d->o->max_triangles) { /* the halves would pass the bound mesh_rounds
-                                            checked on the round's triangles */
-        free(s);
-        return false;
-    }
-    if (!n)
-        return false;
-    uint32_t *vid = malloc(ns * sizeof *vid);
-    /* list zeroed: GCC cannot see that halve_triangles fills what measure_triangles reads */
-    uint32_t *tri = malloc(3 * nn * sizeof *tri), *list = calloc(2 * n, sizeof *list);
-    uint32_t *cut = malloc(nt * sizeof *cut); /* triangle t's side (s's index), or none */
-    uint8_t *nmiss = malloc(2 * n);
-    bool ok = vid && tri && list && cut && nmiss && side_vertices(d, s, ns, vid);
-    if (ok)
-        memset(cut, 0xff, nt * sizeof *cut);
-    for (size_t j = 0; ok && j < n; j++)
-        cut[s[j].tri / 3] = (uint32_t)j;
-    size_t nl = ok ? halve_triangles(d, s, cut, vid, tri, list) : 0;
-    uint32_t *old = d->tri;
-    size_t oldcap = d->capt;
-    if (ok) {
-        d->tri = tri;
-        d->nt = nn;
-        d->capt = cap;
-        measure_triangles(d, list, nl, nmiss);
-        for (size_t j = 0; j < nl; j++)
-            ok &= !nmiss[j];
-        ok &= !d->nomem;
-        if (!ok) { /* as they were */
-            d->tri = old;
-            d->nt = nt;
-            d->capt = oldcap;
-        }
-    }
-    free(ok ? old : tri);
-    free(s);
-    free(vid);
-    free(list);
-    free(cut);
-    free(nmiss);
-    return ok;
-}
-
-size_t ism_dual_mark_misses(dual *d, uint64_t *missed)
+size_t ism_dual_mark_misses(dual *d, const uint8_t *miss, uint64_t *missed)
 {
     size_t marked = 0;
     *missed = 0;
-    uint8_t *miss = malloc(d->nt ? d->nt : 1);
-    if (!miss) {
-        d->nomem = true;
-        return 0;
-    }
-    measure_triangles(d, NULL, d->nt, miss);
-    if (!d->nomem && split_sides(d, miss)) {
-        free(miss);
-        return 0;
-    }
     for (size_t t = 0; t < d->nt && !d->nomem; t++) {
         int m = miss[t];
         if (!m)
@@ -563,7 +326,6 @@ size_t ism_dual_mark_misses(dual *d, uint64_t *missed)
             any = mark_fan_leaves(d, t, &marked);
         *missed += !any;
     }
-    free(miss);
     return marked;
 }
 
@@ -655,9 +417,21 @@ static uint64_t quad_key(const dual *d, const uint32_t *u)
     return ((uint64_t)u[0] << 48 | (uint64_t)u[1] << 32 | (uint64_t)u[2] << 16 | u[3]) + 1;
 }
 
+void ism_dual_vertex_onto(dual *d, worker *w, double m[3], double size, double out[3])
+{
+    double q[3];
+    if (!ism_dual_newton_onto(w, m, size)) {
+        out[0] = out[1] = out[2] = NAN;
+        return;
+    }
+    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q, NULL))
+        memcpy(m, q, 3 * sizeof *m);
+    memcpy(out, m, 3 * sizeof *m);
+}
+
 /* Task k: the centre of the quad at in[k] into out[3k..3k+3): the mean of its corners as a
- * vertex (vertex_onto, within the longer diagonal); NaN when Newton cannot finish. A pure
- * function of the corners, like the vertices. */
+ * vertex (ism_dual_vertex_onto, within the longer diagonal); NaN when Newton cannot finish.
+ * A pure function of the corners, like the vertices. */
 static void fan_task(void *ctx, size_t k, int thread)
 {
     task_ctx *job = ctx;
@@ -676,7 +450,7 @@ static void fan_task(void *ctx, size_t k, int thread)
         }
         size = fmax(size, sqrt(l));
     }
-    vertex_onto(d, w, m, size, out);
+    ism_dual_vertex_onto(d, w, m, size, out);
 }
 
 /* Would four triangles round a centre do better than the two in tri[0..6) (a quad cut across
@@ -687,12 +461,13 @@ static void fan_task(void *ctx, size_t k, int thread)
 static bool fan_helps(dual *d, const uint32_t *tri)
 {
     double e = d->o->max_error;
-    if (!(mid_dist(d, tri[0], tri[2]) <= e))
+    if (!(ism_dual_mid_dist(d, tri[0], tri[2]) <= e))
         return true;
     for (int t = 0; t < 2; t++) {
         const uint32_t *v = &tri[3 * t];
-        bool sides = mid_dist(d, v[0], v[1]) <= e && mid_dist(d, v[1], v[2]) <= e &&
-                     mid_dist(d, v[2], v[0]) <= e;
+        bool sides = ism_dual_mid_dist(d, v[0], v[1]) <= e &&
+                     ism_dual_mid_dist(d, v[1], v[2]) <= e &&
+                     ism_dual_mid_dist(d, v[2], v[0]) <= e;
         if (sides)
             return true; /* its miss is the centroid's (or it faces against ∇f) */
     }
@@ -729,7 +504,7 @@ void ism_dual_emit_quads(dual *d)
         }
         uint64_t key = quad_key(d, u);
         const double *known = key ? keyed_get(&d->fans, key) : NULL;
-        int a = mid_dist(d, u[0], u[2]) <= mid_dist(d, u[1], u[3]) ? 0 : 1;
+        int a = ism_dual_mid_dist(d, u[0], u[2]) <= ism_dual_mid_dist(d, u[1], u[3]) ? 0 : 1;
         ok = add_tri(d, u[a], u[a + 1], u[a + 2]) && add_tri(d, u[a], u[a + 2], u[(a + 3) % 4]);
         if (known) { /* cut as a fan in an earlier round: its centre kept */
             fan[q] = 2;
@@ -746,7 +521,7 @@ void ism_dual_emit_quads(dual *d)
             list[nl++] = first[q] + 1;
         }
     if (ok && nl) /* nl: list's entries written (none: nothing to measure) */
-        measure_triangles(d, list, nl, miss);
+        ism_dual_measure_triangles(d, list, nl, miss);
     for (size_t q = 0, k = 0; ok && q < nq; q++)
         if (d->q.q[4 * q + 3] != UINT32_MAX && !fan[q]) {
             fan[q] = (miss[k] || miss[k + 1]) && fan_helps(d, &d->tri[3 * first[q]]);

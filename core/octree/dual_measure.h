@@ -7,6 +7,22 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "core/octree/dual_tree.h"
+#include "core/octree/edge_keys.h"
+
+/* Vertices a and b in one key (their edge key + 1: never 0, as the memos want), the same
+ * either way round. */
+static inline uint64_t pair_key(uint32_t a, uint32_t b)
+{
+    return ism_edge_key(a, b) + 1;
+}
+
+/* The midpoint of the pair key stands for into m. */
+static inline void pair_mid(const dual *d, uint64_t key, double m[3])
+{
+    uint32_t a = (uint32_t)((key - 1) >> 32), b = (uint32_t)(key - 1);
+    for (int k = 0; k < 3; k++)
+        m[k] = 0.5 * (d->pos[3 * a + k] + d->pos[3 * b + k]);
+}
 
 /* The round's quads as triangles. Each is cut across the diagonal whose midpoint lies nearer
  * f = 0 — where the surface is a saddle (the torus's inner half) the two diagonals sag to
@@ -20,17 +36,27 @@
  * any triangle (ism_dual_mark_misses); a quad once cut as a fan keeps its centre (d->fans). */
 void ism_dual_emit_quads(dual *d);
 
-/* Marks the leaves of triangles that miss E (centroid and edge midpoints within E of f = 0,
- * facing along ∇f: measure_triangles); returns how many leaves can still split and counts
- * the misses at max_depth into *missed. A fan's centre (ism_dual_emit_quads) belongs to no leaf: a
- * fan's triangle whose leaves are at max_depth splits the fan's other leaves
- * (mark_fan_leaves). Where every miss is a side between two leaves' vertices just past E
- * (within SIDE_SPLIT_MAX E, each missed by its two triangles and nothing else missed: split_sides), the
- * sides are cut instead, each triangle in two at a vertex on the side's midpoint's foot,
- * and when all the halves meet E they stand in the mesh and nothing is marked (0): a
- * sphere-like surface's last round was often a whole level of leaves split for a few chords
- * a hair too long. Not with a crease, the grown box or isolated points. */
-size_t ism_dual_mark_misses(dual *d, uint64_t *missed);
+/* The miss masks of triangles list[0..n) (list NULL: triangles 0..n) into miss[0..n): a
+ * bit per corner, the ends of each edge whose midpoint lies beyond E and all three when the
+ * centroid misses (ism_dual_centroid_within_at); 0 within E. Triangles that met E in an
+ * earlier round (d->passed) read 0 unmeasured; the rest are measured on the pool and
+ * remembered when they pass. Out of memory: d->nomem. */
+void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *miss);
+
+/* The distance to f = 0 of the midpoint of vertices a and b (the memo d->mid, else measured
+ * on thread 0). */
+double ism_dual_mid_dist(dual *d, uint32_t a, uint32_t b);
+
+/* m (a point near f = 0, within size of it) moved onto f = 0 by Newton and then as a leaf's
+ * vertex is (place_vertex: the straddle move) into out; NaN there when Newton cannot
+ * finish. A pure function of m, like the vertices: fans' centres and cut sides' vertices. */
+void ism_dual_vertex_onto(dual *d, worker *w, double m[3], double size, double out[3]);
+
+/* Marks the leaves of the round's triangles that miss E (miss: ism_dual_measure_triangles'
+ * masks of all of them); returns how many leaves can still split and counts the misses at
+ * max_depth into *missed. A fan's centre (ism_dual_emit_quads) belongs to no leaf: a fan's
+ * triangle whose leaves are at max_depth splits the fan's other leaves (mark_fan_leaves). */
+size_t ism_dual_mark_misses(dual *d, const uint8_t *miss, uint64_t *missed);
 
 /* In the grown box: the triangles across the request's box's planes clipped as the final
  * mesh will be (dual_box.h), and the leaves of each with a piece beyond E marked to split;

@@ -111,7 +111,7 @@ typedef struct dual {
     keyed passed;       /* triangles (tri_key) that met E */
     keyed mid;          /* vertex pairs (pair_key): the distance of their midpoint to f = 0 */
     keyed fans;         /* quads (quad_key) cut as a fan: their centre vertex */
-    keyed sides;        /* sides (pair_key) a round tried to cut: their vertex (split_sides) */
+    keyed sides;        /* sides (pair_key) a round tried to cut: their vertex (dual_sides.c) */
     int ec0[12], ec1[12], ef[12][2]; /* the cube's edges: ends and faces (ism_cube_edge) */
     double shift;     /* vertices move at most this far along ∇f (straddle.h), or 0 */
     const ism_dual_ball *balls; /* round the isolated singular points (dual_balls.h) */
@@ -157,7 +157,7 @@ typedef struct task_ctx {
     size_t n; /* the chunked loops' item count; 0 where a task is one item */
 } task_ctx;
 
-/* What a task of measure_pairs or measure_triangles measures: up to MEASURE_LANES points,
+/* What a task of measure_pairs or ism_dual_measure_triangles measures: up to MEASURE_LANES points,
  * their gradients in one batch (ism_sample_grad_batch: bit for bit ism_dual_dist's first
  * sample, for less). */
 #define MEASURE_LANES ISM_GRAD_BATCH

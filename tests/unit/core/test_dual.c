@@ -237,7 +237,7 @@ static void torus_proofs_within(double e, uint64_t most)
  * evaluations in the three boxes before the rule and takes 5,904 / 5,904 / 6,026 after it
  * (the bench's box: 4,048 triangles either way). Measured again on ae8e566 + revD 1 (with
  * children_free's batches, free children skipping their proofs, the faces' tiles, and the
- * sides cut by split_sides): 7,558 / 7,558 / 7,668 with the rule, 9,270 / 9,308 / 9,404
+ * sides cut by dual_sides.c): 7,558 / 7,558 / 7,668 with the rule, 9,270 / 9,308 / 9,404
  * without it (sag_split left out of dual_classify.c's classify_head; two rounds instead of
  * none), a few more or less from run to run (the per-thread memos): 8,000 fails the old
  * rule. Still dual, within E at every vertex, midpoint and centroid (closed form). */
@@ -325,7 +325,7 @@ static int cells_across_sphere(const double box[6], int n)
     return k;
 }
 
-/* A round whose every miss is a side a little beyond E (dual_measure.c split_sides) ends
+/* A round whose every miss is a side a little beyond E (dual_sides.c) ends
  * with the side's two triangles cut at a vertex on the side's midpoint's foot, not with a
  * round that splits the side's two leaves: the unit sphere in ±1.5 at E 0.0141 (the bench's
  * setting for its 1e-2 target). Its level-3 mesh (360 triangles, 54 quads fanned) missed
@@ -366,8 +366,8 @@ Test(dual, near_sides_split_instead_of_a_round)
 }
 
 /* The triangle limit holds after the sides are cut (revD 1): mesh_rounds checks the
- * round's triangles against max_triangles before split_sides, which adds one triangle per
- * cut one. The sphere at E 0.0141 (as above: its first mesh missed only on sides, which
+ * round's triangles against max_triangles before ism_dual_split_sides, which adds one
+ * triangle per cut one. The sphere at E 0.0141 (as above: its first mesh missed only on sides, which
  * cut gave the final mesh) with max_triangles one below that final mesh's count: either
  * the mesher stops as too big, or its mesh is within the limit. Before the fix the first
  * mesh passed the check (fewer triangles) and the cut one came back over it. */
@@ -398,7 +398,7 @@ Test(dual, side_split_keeps_the_triangle_limit)
 /* Children that their parent's failed emptiness proof already showed free of f = 0 (its
  * sub-boxes, halved at the parent's lattice centre: dnode.free_kids) are empty leaves
  * without proofs of their own. The bench's torus at E 0.0141, three boxes (1,008 / 1,008 /
- * 1,004 triangles, no round since split_sides; it was 1,144 and one round): 5,774 / 5,774 /
+ * 1,004 triangles, no round since dual_sides.c; it was 1,144 and one round): 5,774 / 5,774 /
  * 5,856 interval evaluations with the rule, 6,166 / 6,176 / 6,270 when every child is
  * proven again (dual.c split_task with parent->free_kids left out; measured on ae8e566 +
  * revD 1, ±20 from run to run: the per-thread memos). 6,000 lies between the two. The
