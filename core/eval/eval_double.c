@@ -5,6 +5,7 @@
  * lets gcc -O2 vectorise them without run-time alias or remainder checks. Short batches
  * (ism_eval_points: the conformance pass's rim samples) loop over just their lanes and take
  * sines and cosines through the workspace's memo, as one point does. */
+#include "core/eval/avx2_clone.h"
 #include "core/eval/workspace.h"
 #include "core/eval/trig_pair.h"
 #include "core/expr/scalar_ops.h"
@@ -285,17 +286,15 @@ static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, 
 }
 
 /* The tape over one chunk, compiled twice: for AVX2 (4 lanes per vector) and for the
- * x86-64 baseline (SSE2, 2 lanes); chosen at run time by what the CPU supports. (An
- * explicit choice rather than ifunc target_clones, whose resolvers run before sanitizer
- * and coverage runtimes start.) */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2")))
+ * x86-64 baseline (SSE2, 2 lanes); chosen at run time by what the CPU supports
+ * (avx2_clone.h). */
+#if ISM_HAVE_AVX2_CLONE
+ISM_AVX2_CLONE
 static void run_tape_avx2(const ism_tape *t, double *regs, size_t ngroups)
 {
     for (size_t i = 0; i < t->len; i++)
         batch_op(&t->code[i], regs, ngroups);
 }
-#define HAVE_AVX2_PATH 1
 #endif
 
 static void run_tape_base(const ism_tape *t, double *regs, size_t ngroups)
@@ -306,8 +305,8 @@ static void run_tape_base(const ism_tape *t, double *regs, size_t ngroups)
 
 static void run_tape(const ism_tape *t, double *regs, size_t ngroups)
 {
-#ifdef HAVE_AVX2_PATH
-    if (__builtin_cpu_supports("avx2")) {
+#if ISM_HAVE_AVX2_CLONE
+    if (ISM_RUN_AVX2()) {
         run_tape_avx2(t, regs, ngroups);
         return;
     }

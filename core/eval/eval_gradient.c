@@ -1,6 +1,7 @@
 /* eval_gradient.c — f and its gradient by forward-mode differentiation: each register
  * carries a value and its three partial derivatives. min and max follow the branch they
  * take (the derivative of the side that is the result). */
+#include "core/eval/avx2_clone.h"
 #include "core/eval/deriv_rules.h"
 #include "core/eval/lanes4.h"
 #include "core/eval/trig_pair.h"
@@ -203,20 +204,19 @@ static inline __attribute__((always_inline)) ism_dual *dual_inputs(ism_eval_ws *
  * the x86-64 baseline (two SSE2 ones); chosen at run time as eval_double.c chooses. Klein
  * bottle's tape, callgrind, a gradient: 702 instructions with the steps written out on
  * scalars, 631 so. */
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2")))
+#if ISM_HAVE_AVX2_CLONE
+ISM_AVX2_CLONE
 static void run_steps_avx2(const ism_instr *code, size_t n, ism_dual *r, ism_trig_cache *trig)
 {
     for (size_t i = 0; i < n; i++)
         dual_step(&code[i], r, trig);
 }
-#define HAVE_AVX2_PATH 1
 #endif
 
 static void run_steps(const ism_instr *code, size_t n, ism_dual *r, ism_trig_cache *trig)
 {
-#ifdef HAVE_AVX2_PATH
-    if (__builtin_cpu_supports("avx2")) {
+#if ISM_HAVE_AVX2_CLONE
+    if (ISM_RUN_AVX2()) {
         run_steps_avx2(code, n, r, trig);
         return;
     }

@@ -10,6 +10,7 @@
  * choices as bit masks with the same outcome, NaN included); a batch is padded up to a whole
  * group by repeating its last point. The tape loop is compiled for AVX2 and for the
  * x86-64 baseline, chosen at run time (as eval_double.c does). */
+#include "core/eval/avx2_clone.h"
 #include "core/eval/deriv_rules.h"
 #include "core/eval/lanes4.h"
 #include "core/eval/trig_pair.h"
@@ -287,7 +288,7 @@ INLINE void run_tape_n(const ism_tape *t, double *regs, ism_trig_cache *trig, si
         grad_step(&t->code[i], regs, trig, ng);
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if ISM_HAVE_AVX2_CLONE
 /* ng a constant in each case (the polygoniser's batches: a node's or a leaf's few points),
  * so that grad_step's loops over the groups unroll: the per-step loop control and address
  * arithmetic were most of a short batch's cost. Klein bottle's tape, callgrind, instructions
@@ -296,7 +297,7 @@ INLINE void run_tape_n(const ism_tape *t, double *regs, ism_trig_cache *trig, si
  * 4`s) 1,546 / 391 / 333 / 251; with its loops over the groups unrolled up to 4 (GCC left 3
  * and 4 groups rolled) at 10 / 12 / 16 / 32 points 367 / 313 / 272 / 230 -> 244 / 205 / 177 /
  * 209 (6 and 8: 345 / 260). */
-__attribute__((target("avx2")))
+ISM_AVX2_CLONE
 static void run_tape_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
 {
     switch (ng) {
@@ -307,7 +308,6 @@ static void run_tape_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig,
     default: run_tape_n(t, regs, trig, ng); break;
     }
 }
-#define HAVE_AVX2_PATH 1
 #endif
 
 static void run_tape_base(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
@@ -330,8 +330,8 @@ static void grad_chunk(const ism_tape *t, ism_eval_ws *ws, const double *x, cons
             for (size_t g = 0; g < ng; g++)
                 k_fill(comp(regs, v, k) + g * VL, (uint32_t)(k - 1) == v ? 1.0 : 0.0);
     }
-#ifdef HAVE_AVX2_PATH
-    if (__builtin_cpu_supports("avx2"))
+#if ISM_HAVE_AVX2_CLONE
+    if (ISM_RUN_AVX2())
         run_tape_avx2(t, regs, ws->trig, ng);
     else
 #endif

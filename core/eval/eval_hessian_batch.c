@@ -13,6 +13,7 @@
  * registers in the AVX2 clone, chosen at run time, pairs of SSE2 ones otherwise); a batch
  * is padded to whole groups by repeating its last point. One-argument operations other than
  * the affine ones and squares take g, g' and g'' lane by lane (deriv_rules.h). */
+#include "core/eval/avx2_clone.h"
 #include "core/eval/deriv_rules.h"
 #include "core/eval/lanes4.h"
 #include "core/eval/workspace.h"
@@ -200,13 +201,12 @@ INLINE void step(const ism_instr *in, hj *r, size_t ng)
     }
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2"))) static void run_avx2(const ism_tape *t, hj *r, size_t ng)
+#if ISM_HAVE_AVX2_CLONE
+ISM_AVX2_CLONE static void run_avx2(const ism_tape *t, hj *r, size_t ng)
 {
     for (size_t i = 0; i < t->len; i++)
         step(&t->code[i], r, ng);
 }
-#define HAVE_AVX2_PATH 1
 #endif
 
 static void run_base(const ism_tape *t, hj *r, size_t ng)
@@ -228,8 +228,8 @@ static void chunk(const ism_tape *t, hj *r, const double (*p)[3], double *f, dou
                 x->v[j] = p[q * VL + j < n ? q * VL + j : n - 1][k];
             x->d[k] = splat(1.0);
         }
-#ifdef HAVE_AVX2_PATH
-    if (__builtin_cpu_supports("avx2"))
+#if ISM_HAVE_AVX2_CLONE
+    if (ISM_RUN_AVX2())
         run_avx2(t, r, ng);
     else
 #endif

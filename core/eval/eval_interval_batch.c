@@ -21,6 +21,7 @@
  * counts it as 0 (iv_mul's rule). This file is compiled with
  * -frounding-math (Makefile) so gcc keeps every operation as written (no -(a*b) for
  * a*(-b)). */
+#include "core/eval/avx2_clone.h"
 #include "core/eval/interval_ops.h"
 #include "core/eval/workspace.h"
 
@@ -347,15 +348,14 @@ static ALWAYS_INLINE void chunk(const ism_tape *t, double *lo, double *nh,
     }                                                                                   \
     rounding_set(mode);
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2")))
+#if ISM_HAVE_AVX2_CLONE
+ISM_AVX2_CLONE
 static void chunks_avx2(const ism_tape *t, double *lo, double *nh, const ism_interval *x,
                         const ism_interval *y, const ism_interval *z, ism_interval *out,
                         size_t n)
 {
     CHUNKS_BODY
 }
-#define HAVE_AVX2_PATH 1
 #endif
 
 static void chunks_base(const ism_tape *t, double *lo, double *nh, const ism_interval *x,
@@ -376,8 +376,8 @@ void ism_eval_interval_batch(const ism_tape *t, ism_eval_ws *ws, const ism_inter
     }
     if (n == 0)
         return;
-#ifdef HAVE_AVX2_PATH
-    if (__builtin_cpu_supports("avx2")) {
+#if ISM_HAVE_AVX2_CLONE
+    if (ISM_RUN_AVX2()) {
         chunks_avx2(t, ws->iv_lo, ws->iv_hi, x, y, z, out, n);
         return;
     }

@@ -19,6 +19,7 @@
  * The lanes are walked in groups of ISM_IVG_VL, each one value of GCC's vector extension
  * (AVX2 registers in the AVX2 clone, chosen at run time, pairs of SSE2 ones otherwise); a
  * batch is padded up to whole groups by repeating its last box. */
+#include "core/eval/avx2_clone.h"
 #include "core/eval/interval_jet_ws.h"
 #include "core/eval/interval_ops.h"
 #include "core/eval/lanes4.h"
@@ -235,12 +236,11 @@ INLINE void run_group(const ism_tape *t, vj *r, vj *keep)
     }
 }
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-__attribute__((target("avx2"))) static void run_avx2(const ism_tape *t, vj *r, vj *keep)
+#if ISM_HAVE_AVX2_CLONE
+ISM_AVX2_CLONE static void run_avx2(const ism_tape *t, vj *r, vj *keep)
 {
     run_group(t, r, keep);
 }
-#define HAVE_AVX2_PATH 1
 #endif
 
 static void run_base(const ism_tape *t, vj *r, vj *keep) { run_group(t, r, keep); }
@@ -288,8 +288,8 @@ bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
             for (int m = 0; m < 3; m++)
                 r[k].d[m] = m == k ? (vi){splat(1.0), splat(1.0)} : ivz();
         }
-#ifdef HAVE_AVX2_PATH
-        if (__builtin_cpu_supports("avx2"))
+#if ISM_HAVE_AVX2_CLONE
+        if (ISM_RUN_AVX2())
             run_avx2(t, r, keep);
         else
 #endif
