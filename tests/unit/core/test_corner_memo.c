@@ -29,23 +29,20 @@ static void key_point(uint64_t key, int32_t ip[3])
     ip[2] = (int32_t)(k & mask);
 }
 
-/* f built over box on `threads` threads into the caller's corner memos; every entry held
- * checked against f's full tape; returns how many entries were held. */
-static size_t check_memos(const ism_tape *t, const double box[6], int threads)
+/* f built over box (the grid MAX_DEPTH deep) down to max_depth on `threads` threads into
+ * the caller's corner memos, which may hold an earlier build's entries. */
+static void build_into(const ism_tape *t, const double box[6], int threads, int min_depth,
+                       int max_depth, ism_point_entry *memos, ism_octree *tree)
 {
-    size_t per = (size_t)1 << ISM_CORNER_MEMO_BITS;
-    ism_point_entry *memos = calloc((size_t)threads * per, sizeof *memos);
-    cr_assert(memos);
-    ism_octree tree;
-    memset(&tree, 0, sizeof tree);
-    ism_grid_init(&tree.grid, box, MAX_DEPTH);
+    memset(tree, 0, sizeof *tree);
+    ism_grid_init(&tree->grid, box, MAX_DEPTH);
     ism_octree_build_params p = {
         .tape = t,
-        .min_depth = 3,
-        .max_depth = MAX_DEPTH,
+        .min_depth = min_depth,
+        .max_depth = max_depth,
         .thin_depth = MAX_DEPTH,
         .flatness = {.gradient_test = 0.9, .normal_cos = 0.9, .plane_frac = 0.05,
-                     .abs_tol = 0.25 * ism_grid_cell_size(&tree.grid, MAX_DEPTH),
+                     .abs_tol = 0.25 * ism_grid_cell_size(&tree->grid, MAX_DEPTH),
                      .double_root_eps = 1e-9, .double_root_iters = 25, .max_error = MAX_ERROR},
         .threads = threads,
         .max_nodes = (size_t)1 << 24,
@@ -53,7 +50,24 @@ static size_t check_memos(const ism_tape *t, const double box[6], int threads)
     };
     memcpy(p.flatness.box, box, sizeof p.flatness.box);
     ism_octree_build_stats st;
-    cr_assert_eq(ism_octree_build(&tree, &p, &st), ISM_BUILD_OK);
+    cr_assert_eq(ism_octree_build(tree, &p, &st), ISM_BUILD_OK);
+}
+
+/* f built over box on `threads` threads into the caller's corner memos, empty or (refill)
+ * first filled by a coarser build with another min_depth on the same grid, as a later
+ * round's build finds them; every entry held checked against f's full tape; returns how
+ * many entries were held. */
+static size_t check_memos(const ism_tape *t, const double box[6], int threads, bool refill)
+{
+    size_t per = (size_t)1 << ISM_CORNER_MEMO_BITS;
+    ism_point_entry *memos = calloc((size_t)threads * per, sizeof *memos);
+    cr_assert(memos);
+    ism_octree tree;
+    if (refill) {
+        build_into(t, box, threads, 2, MAX_DEPTH - 2, memos, &tree);
+        ism_octree_free(&tree);
+    }
+    build_into(t, box, threads, 3, MAX_DEPTH, memos, &tree);
     ism_eval_ws *ws = ism_eval_ws_new(t);
     cr_assert(ws);
     size_t held = 0;
@@ -90,12 +104,13 @@ Test(corner_memo, holds_f_own_values_bit_for_bit, .timeout = 120)
         for (int w = pf_first_box(); w < 3; w++) {
             double box[6];
             pf_sweep_box(s->box, MAX_DEPTH, w, box);
-            for (int threads = 1; threads <= 2; threads++) {
-                size_t held = check_memos(t, box, threads);
-                /* thousands of corners (the leaves alone have ~10^4) */
-                cr_expect_gt(held, 1000, "%s box %d, %d threads: %zu points held", s->name, w,
-                             threads, held);
-            }
+            for (int threads = 1; threads <= 2; threads++)
+                for (int refill = 0; refill < 2; refill++) {
+                    size_t held = check_memos(t, box, threads, refill);
+                    /* thousands of corners (the leaves alone have ~10^4) */
+                    cr_expect_gt(held, 1000, "%s box %d, %d threads%s: %zu points held",
+                                 s->name, w, threads, refill ? " (refilled)" : "", held);
+                }
         }
         ism_tape_free(t);
     }
@@ -109,7 +124,7 @@ Test(corner_memo, cells_take_the_builds_values, .timeout = 120)
     for (int w = pf_first_box(); w < 3; w++) {
         double box[6];
         pf_sweep_box(s->box, dmax, w, box);
-        double bound = 3e-3 * (box[3] - box[0]); /* takes rounds after the first */
+        double bound = 3e-3 * (box[3] - box[0]); /* takes rounds after the first (below) */
         ism_mesh ref, m;
         ism_poly_stats rs, st;
         test_mesh_of(t, box, dmax, bound, 1, true, &ref, &rs);
@@ -118,6 +133,8 @@ Test(corner_memo, cells_take_the_builds_values, .timeout = 120)
             test_mesh_of(t, box, dmax, bound, threads, false, &m, &st);
             cr_expect_gt(st.corner_values, 0, "box %d, %d threads: no corner value taken", w,
                          threads);
+            /* the later rounds' builds read a memo the earlier rounds filled */
+            cr_expect_gt(st.error_rounds, 0, "box %d, %d threads: one round only", w, threads);
             cr_expect(test_same_mesh(&ref, &m), "box %d, %d threads: the mesh differs (%zu / "
                       "%zu triangles)", w, threads, ref.ntris, m.ntris);
             ism_mesh_free(&m);
