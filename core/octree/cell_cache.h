@@ -31,10 +31,15 @@ typedef struct ism_point_entry {
 } ism_point_entry;
 
 /* The octree build's memo of f and ∇f at node corners (ism_point_memo): 2^16 entries of 40
- * bytes, 2.5 MB a thread. Its values are pure, so the polygoniser keeps one per thread over
- * all max_error rounds (octree_build.h's corner_memos) and the cells of a round ask their
- * thread's before they evaluate a lattice point of their own (face_lines.c lattice_entry):
- * most points a cell walks are corners the build evaluated in its flatness tests. */
+ * bytes, 2.5 MB a thread. Its values are pure, so the polygoniser keeps one per thread from
+ * the build through its cells and on over the max_error rounds (octree_build.h's
+ * corner_memos; under ism_poly_options.fresh_rounds it is freed after each round and
+ * allocated again for the next) and the cells of a round ask their thread's before they
+ * evaluate a lattice point of their own (face_lines.c lattice_entry): most points a cell
+ * walks are corners the build evaluated in its flatness tests. Memory: held until the last
+ * round's cells are done, 2.5 MB × threads (160 MB at 64), and like the cells' own caches
+ * above (about 6 MB a thread) not counted against ism_poly_options.max_memory, which sizes
+ * only the nodes, roots and triangles (polygonise.c). */
 #define ISM_CORNER_MEMO_BITS 16
 
 /* A lattice point as the cell phase memoises it: one cache line. */
