@@ -475,8 +475,6 @@ static void free_caches(carry *c)
     free(c->caches);
     c->caches = NULL;
     c->ncaches = 0;
-    free(c->corners);
-    c->corners = NULL;
 }
 
 /* The threads' corner memos for the build and the cells of a round: the last round's (the
@@ -489,6 +487,12 @@ static bool round_corners(carry *c, const ism_poly_options *o, ism_pool *pool,
         return true;
     size_t n = (size_t)ism_pool_threads(pool) << ISM_CORNER_MEMO_BITS;
     return (c->corners = ism_zeroed_alloc(pool, n, sizeof *c->corners, cost)) != NULL;
+}
+
+static void free_corners(carry *c)
+{
+    free(c->corners);
+    c->corners = NULL;
 }
 
 /* The leaves of p->tree that emit what they emitted in the last round (c), when there was
@@ -664,8 +668,10 @@ done:
             ism_eval_ws_free(p.ctx[t].c.s.ws);
         ism_cell_ctx_free(&p.ctx[t].c);
     }
-    if (!next || !next->n || o->fresh_rounds || status != ISM_POLY_OK)
+    if (!next || !next->n || o->fresh_rounds || status != ISM_POLY_OK) {
         free_caches(c); /* no round follows, or it starts afresh */
+        free_corners(c);
+    }
     free(p.ctx);
     free(p.leaves);
     free(parent);
@@ -921,6 +927,7 @@ enum ism_poly_status ism_polygonise(const ism_tape *f, const ism_poly_options *o
     ism_octree_free(&prev.tree);
     ism_leaf_memo_free(&prev.memo);
     free_caches(&prev);
+    free_corners(&prev);
     uint64_t rounds = stats->error_rounds;
     enum ism_dual_reason declined = stats->dual_declined;
     *stats = round;
