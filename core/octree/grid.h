@@ -44,11 +44,23 @@ static inline int32_t ism_grid_cell_steps(const ism_grid *g, int level)
     return (int32_t)1 << (g->depth - level);
 }
 
-/* A lattice point as one nonzero 64-bit key: 21 bits per coordinate (the lattice's
- * 2^ISM_GRID_MAX_DEPTH + 1 points per axis fit), plus one so that 0 marks an empty slot. */
+/* A lattice point as one nonzero 64-bit key: ISM_LATTICE_KEY_BITS per coordinate (the
+ * lattice's 2^ISM_GRID_MAX_DEPTH + 1 points per axis fit in 21), plus one so that 0 marks an
+ * empty slot. */
+#define ISM_LATTICE_KEY_BITS 21
 static inline uint64_t ism_lattice_key(const int32_t p[3])
 {
-    return (((uint64_t)p[0] << 42) | ((uint64_t)p[1] << 21) | (uint64_t)p[2]) + 1;
+    uint64_t k = (uint64_t)p[0] << 2 * ISM_LATTICE_KEY_BITS;
+    return (k | (uint64_t)p[1] << ISM_LATTICE_KEY_BITS | (uint64_t)p[2]) + 1;
+}
+
+/* The lattice point of a key: the inverse of ism_lattice_key. */
+static inline void ism_lattice_point(uint64_t key, int32_t p[3])
+{
+    uint64_t k = key - 1, mask = ((uint64_t)1 << ISM_LATTICE_KEY_BITS) - 1;
+    p[0] = (int32_t)(k >> 2 * ISM_LATTICE_KEY_BITS & mask);
+    p[1] = (int32_t)(k >> ISM_LATTICE_KEY_BITS & mask);
+    p[2] = (int32_t)(k & mask);
 }
 
 /* Spreads a key's bits over the whole word, for tables indexed by its low bits. */

@@ -55,15 +55,6 @@ static void build(const ism_tape *t, const double box[6], int min_depth, int max
     cr_assert_eq(ism_octree_build(tree, &p, &st), ISM_BUILD_OK);
 }
 
-/* The lattice point of a registry key (the inverse of ism_lattice_key). */
-static void point_of(uint64_t key, int32_t p[3])
-{
-    key -= 1;
-    p[0] = (int32_t)(key >> 42);
-    p[1] = (int32_t)((key >> 21) & ((1u << 21) - 1));
-    p[2] = (int32_t)(key & ((1u << 21) - 1));
-}
-
 /* Every point of `whole` (its n entries, listed in e) inside box b is in `part` with the same
  * successors up to b's end. */
 static void same_inside(const ism_break_point *const *e_of, size_t n, const ism_breaks *part,
@@ -72,7 +63,7 @@ static void same_inside(const ism_break_point *const *e_of, size_t n, const ism_
     for (size_t s = 0; s < n; s++) {
         const ism_break_point *e = e_of[s];
         int32_t p[3];
-        point_of(e->key, p);
+        ism_lattice_point(e->key, p);
         bool inside = true;
         for (int a = 0; a < 3; a++)
             inside &= b->lo[a] <= p[a] && p[a] <= b->hi[a];

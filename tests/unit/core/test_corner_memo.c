@@ -20,15 +20,6 @@
 #define MAX_DEPTH 6
 #define MAX_ERROR 1e-2
 
-/* The lattice point of a key (grid.h ism_lattice_key: 21 bits a coordinate, plus one). */
-static void key_point(uint64_t key, int32_t ip[3])
-{
-    uint64_t k = key - 1, mask = ((uint64_t)1 << 21) - 1;
-    ip[0] = (int32_t)(k >> 42 & mask);
-    ip[1] = (int32_t)(k >> 21 & mask);
-    ip[2] = (int32_t)(k & mask);
-}
-
 /* f built over box (the grid MAX_DEPTH deep) down to max_depth on `threads` threads into
  * the caller's corner memos, which may hold an earlier build's entries. */
 static void build_into(const ism_tape *t, const double box[6], int threads, int min_depth,
@@ -76,7 +67,7 @@ static size_t check_memos(const ism_tape *t, const double box[6], int threads, b
         if (!e->key)
             continue;
         int32_t ip[3];
-        key_point(e->key, ip);
+        ism_lattice_point(e->key, ip);
         cr_assert_eq(ism_lattice_key(ip), e->key);
         /* held where its key's slot is (a cell finds it there) */
         cr_assert_eq(ism_point_find(memos + i / per * per, ISM_CORNER_MEMO_BITS, ip), e);
