@@ -198,12 +198,23 @@ static bool some_piece_may_vanish(const search *s, worker *w, const ism_interval
     return any;
 }
 
+/* ((base + p_0) + p_1) + p_2: the one order in which a row of a linear form is summed, by
+ * add_linear and by parent_excludes from products taken once (their bits agree only while
+ * both sum in this order). */
+static ism_interval sum_terms(ism_interval base, const ism_interval p[3])
+{
+    _Pragma("GCC unroll 3") for (int j = 0; j < 3; j++)
+        base = iv_add(base, p[j]);
+    return base;
+}
+
 /* Σ_j a_j (x_j − c_j) added to base. */
 static ism_interval add_linear(ism_interval base, const ism_interval a[3], const ism_interval dx[3])
 {
+    ism_interval p[3];
     _Pragma("GCC unroll 3") for (int j = 0; j < 3; j++)
-        base = iv_add(base, iv_mul(a[j], dx[j]));
-    return base;
+        p[j] = iv_mul(a[j], dx[j]);
+    return sum_terms(base, p);
 }
 
 /* f at the centre c against its Taylor expansion round a singular point p of the cell X:
@@ -312,8 +323,9 @@ static int smooth_tests(const search *s, worker *w, const ism_interval x[3], con
  * ∇f(p) + H(P)(X − p) round P's centre p, no evaluation. Along each axis j a child's X − p
  * is P's lower or upper half less p, so each product H(P)_ij (X_j − p_j) takes one of two
  * values per axis: the 18 products are taken once for the eight children (at the first
- * child that asks) instead of up to 9 per child, and each row is then summed in
- * add_linear's order from the same products, bit for bit what that form gives per child. */
+ * child that asks) instead of up to 9 per child, and each row is then summed by sum_terms,
+ * as add_linear sums it, from the same products: bit for bit what that form gives per
+ * child. */
 typedef struct parent_rows {
     const ism_dual_model *pm;
     const ism_interval *lower, *upper; /* P's halves per axis */
@@ -346,10 +358,10 @@ static bool parent_excludes(parent_rows *r, unsigned m)
     if (!r->ready)
         rows_take(r);
     _Pragma("GCC unroll 3") for (int i = 0; i < 3; i++) {
-        ism_interval row = r->pm->at.d[i];
+        ism_interval p[3];
         for (int j = 0; j < 3; j++)
-            row = iv_add(row, r->t[i][j][(m >> j) & 1u]);
-        if (!holds0(row))
+            p[j] = r->t[i][j][(m >> j) & 1u];
+        if (!holds0(sum_terms(r->pm->at.d[i], p)))
             return true;
     }
     return false;
