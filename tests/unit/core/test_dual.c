@@ -273,6 +273,17 @@ static void sphere_dual(int i, double e, int dmin, int dmax, ism_mesh *m, ism_du
     ism_tape_free(t);
 }
 
+/* m, the unit sphere's dual mesh in box i: within e of it (closed form), closed, χ 2. */
+static void expect_closed_sphere(int i, const ism_mesh *m, const ism_tape *t, double e)
+{
+    double worst = pf_worst_distance(m, pf_unit_sphere_dist);
+    cr_expect_leq(worst, e, "box %d: a point %g from the sphere", i, worst);
+    pf_props p;
+    pf_measure(m, t, &p);
+    cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0, "box %d", i);
+    cr_expect_eq(p.euler, 2, "box %d: χ %ld", i, p.euler);
+}
+
 Test(dual, one_way_bend_splits_before_the_round)
 {
     ism_tape *t = pf_compile(&pf_unit_sphere);
@@ -283,12 +294,7 @@ Test(dual, one_way_bend_splits_before_the_round)
         sphere_dual(i, e, 3, SAFETY_DEPTH, &m, &st);
         cr_expect_eq(st.rounds, 0, "box %d: %llu rounds after the first mesh", i,
                      (unsigned long long)st.rounds);
-        double worst = pf_worst_distance(&m, pf_unit_sphere_dist);
-        cr_expect_leq(worst, e, "box %d: a point %g from the sphere", i, worst);
-        pf_props p;
-        pf_measure(&m, t, &p);
-        cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0, "box %d", i);
-        cr_expect_eq(p.euler, 2, "box %d: χ %ld", i, p.euler);
+        expect_closed_sphere(i, &m, t, e);
         sphere_dual(i, e, 3, 4, &four, &st4);
         sphere_dual(i, e, 5, SAFETY_DEPTH, &five, &st5);
         cr_expect_eq(st4.rounds + st4.missed, 0, "box %d: the level-4 mesh misses E", i);
@@ -350,12 +356,7 @@ Test(dual, near_sides_split_instead_of_a_round)
         int cells = cells_across_sphere(box, 8);
         cr_expect_eq(st.leaves, (uint64_t)cells, "box %d: %llu leaves, %d level-3 cells", i,
                      (unsigned long long)st.leaves, cells);
-        double worst = pf_worst_distance(&m, pf_unit_sphere_dist);
-        cr_expect_leq(worst, e, "box %d: a point %g from the sphere", i, worst);
-        pf_props p;
-        pf_measure(&m, t, &p);
-        cr_expect_eq(p.boundary_edges + p.nonmanifold_edges, 0, "box %d", i);
-        cr_expect_eq(p.euler, 2, "box %d: χ %ld", i, p.euler);
+        expect_closed_sphere(i, &m, t, e);
         sphere_dual(i, e, 4, 4, &four, &st4);
         cr_expect_lt(m.ntris, four.ntris, "box %d: %zu triangles, the level-4 mesh %zu", i,
                      m.ntris, four.ntris);
