@@ -68,6 +68,19 @@ bool rm_in_order(const double *x, const double *a, const double *b)
     return t > ISM_RM_SLIDE_KEEP_ORDER && t < 1 - ISM_RM_SLIDE_KEEP_ORDER;
 }
 
+/* ∇f at x into g, the vertex's normal should it move there. Under a bound through the
+ * pass's memo (rm_bound_gradient: the same evaluation, bit for bit), so that the distance
+ * at x measured next (rm_distance) is a lookup rather than a second evaluation of f and ∇f
+ * at the same point. Where the memo's step fails (∇f vanishes, f not finite) or there is no
+ * memo (no bound), evaluated as before. With slide_vertex's cheap checks first: catenoid's
+ * own box (callgrind --toggle-collect=ism_quality_pass, --quality good --threads 1)
+ * rm_slide_sweep 9.05M -> 7.38M instructions, the same mesh. */
+static void full_gradient(rm_pass *p, const double x[3], double g[3])
+{
+    if (!(p->memo && rm_bound_gradient(p, x, g)))
+        ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+}
+
 /* Tries to slide v; true when it moved. */
 static bool slide_vertex(rm_pass *p, uint32_t v)
 {
@@ -79,8 +92,7 @@ static bool slide_vertex(rm_pass *p, uint32_t v)
     const double *a = p->r.m->pos + 3 * nb[0], *b = p->r.m->pos + 3 * nb[1];
     rm_fan f;
     rm_fan_measure(p, v, &f);
-    double bound = fmax(fmax(p->max_error, boundary_error(p, pos, a, b)),
-                        ISM_RM_SLIDE_ROUNDING * f.mean_edge);
+    double bound = NAN; /* measured once a try passes the shape checks */
     for (double step = 1; step >= 0.5; step *= 0.5) {
         double x[3], g[3];
         for (int k = 0; k < 3; k++)
@@ -90,10 +102,17 @@ static bool slide_vertex(rm_pass *p, uint32_t v)
         if (!rm_project(p, x, f.mean_edge, axis, g))
             continue;
         x[axis] = pos[axis]; /* exactly on the box face */
-        ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
+        /* the checks that cost no evaluation first: the measures are pure (f is), so the
+           order decides nothing; rm_bound_fan, which keeps records, stays last */
         if (!(rm_dist(x, start) <= 0.5 * f.mean_edge) || !rm_in_order(x, a, b) ||
-            !(boundary_error(p, x, a, b) <= bound) || !(rm_distance(p, x) <= bound) ||
-            !rm_fan_accepts(p, v, x, &f) || (p->bounded && !rm_bound_fan(p, v, x)))
+            !rm_fan_accepts(p, v, x, &f))
+            continue;
+        if (isnan(bound))
+            bound = fmax(fmax(p->max_error, boundary_error(p, pos, a, b)),
+                         ISM_RM_SLIDE_ROUNDING * f.mean_edge);
+        full_gradient(p, x, g);
+        if (!(boundary_error(p, x, a, b) <= bound) || !(rm_distance(p, x) <= bound) ||
+            (p->bounded && !rm_bound_fan(p, v, x)))
             continue;
         rm_commit_move(p, v, x, g);
         return true;
