@@ -171,6 +171,7 @@ class Daemon:
         deadline = time.time() + timeout
         while time.time() < deadline and self.port is None:
             if self.proc.poll() is not None:
+                self._log_drained()
                 raise RuntimeError("isomeshd exited at start:\n" + self.log())
             for line in self._log_lines():
                 m = re.search(r'"event":"listening".*"port":(\d+)|listening .*port=(\d+)', line)
@@ -225,6 +226,13 @@ class Daemon:
         self.log_fh = open(self.log_file, "w")
         self.proc = spawn_owned(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
                                 stderr=self.log_fh, env=self.env)
+
+    def _log_drained(self, timeout=5):
+        """After the daemon exited: its last lines read (the reader thread reaches the pipe's
+        end; bounded, since a child that outlived it could hold the pipe). A test that reads the
+        log of a failed start once found it empty: the exit was seen before the thread read."""
+        if self.reader is not None:
+            self.reader.join(timeout)
 
     def _read_stderr(self):
         for line in self.proc.stderr:
