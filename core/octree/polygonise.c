@@ -272,6 +272,18 @@ static bool leaf_measured(phase2 *p, ism_cell_ctx *cx, size_t i, ism_cell_out *o
     return ok;
 }
 
+/* Leaf i's first attempt (its output from v0, t0, s0 on; its stats were *before) undone
+ * and the leaf polygonised and measured into *e again, as cx now says (one_leaf's retries:
+ * with the crease cut, or back to the fan); no fold test. */
+static bool leaf_again(phase2 *p, ism_cell_ctx *cx, size_t i, ism_cell_out *out, size_t v0,
+                       size_t t0, size_t s0, const ism_cell_stats *before, double *e)
+{
+    bool unresolved;
+    out->nverts = v0, out->ntris = t0, out->nsegs = s0;
+    cx->stats = *before;
+    return leaf_measured(p, cx, i, out, v0, t0, false, e, &unresolved);
+}
+
 /* Leaf i of chunk into out: copied from the last round when it emits the same there, else
  * polygonised (and measured under max_error). */
 static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell_out *out)
@@ -300,18 +312,14 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
                bending through a coarse leaf less well than the fan's crease points). A fan
                beyond E is split, or missed at depth.max, as it was: its cut never met E in
                those runs (Barth, E 0.0259 / 0.00389 / 0.00109, depth.max 4..10) */
-            out->nverts = v0, out->ntris = t0, out->nsegs = s0;
-            cx->stats = before;
             cx->cut_creases = true;
-            ok = leaf_measured(p, cx, i, out, v0, t0, false, &e, &unresolved);
+            ok = leaf_again(p, cx, i, out, v0, t0, s0, &before, &e);
             cx->cut_creases = false;
             if (ok && !(e <= p->o->max_error) && !leaf_may_split(p, i)) {
                 /* nothing splits it: the fan, which met E, stands rather than a cut beyond
                    it (Barth at E 0.00389, depth.max 5: 24 leaves' fans 0.0031 from f = 0,
                    their cuts 0.0060) */
-                out->nverts = v0, out->ntris = t0, out->nsegs = s0;
-                cx->stats = before;
-                ok = leaf_measured(p, cx, i, out, v0, t0, false, &e, &unresolved);
+                ok = leaf_again(p, cx, i, out, v0, t0, s0, &before, &e);
             }
         }
         err = (float)e;
