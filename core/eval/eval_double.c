@@ -24,46 +24,95 @@ static inline __attribute__((always_inline)) double trig_value(ism_trig_cache *t
     return sine ? sn : cs;
 }
 
+/* Every operation's value, as an expression in A (its first operand's value), B (its second
+ * operand's), C (its constant) and trig (the sine memo): one list that op_value's switch and
+ * run_threaded's labels both expand, so that the two cannot differ. Each user defines A, B
+ * and C before expanding it. Sines and cosines go through the memo trig (never NULL: every
+ * workspace has one). */
+#define POINT_OPS(X)                                                                        \
+    X(ISM_OP_CONST, C)                                                                      \
+    X(ISM_OP_COPY, A)                                                                       \
+    X(ISM_OP_ADD_RR, A + B)                                                                 \
+    X(ISM_OP_ADD_RC, A + C)                                                                 \
+    X(ISM_OP_SUB_RR, A - B)                                                                 \
+    X(ISM_OP_SUB_CR, C - A)                                                                 \
+    X(ISM_OP_MUL_RR, A * B)                                                                 \
+    X(ISM_OP_MUL_RC, A * C)                                                                 \
+    X(ISM_OP_DIV_RR, A / B)                                                                 \
+    X(ISM_OP_DIV_RC, A / C)                                                                 \
+    X(ISM_OP_DIV_CR, C / A)                                                                 \
+    X(ISM_OP_MIN_RR, ism_min(A, B))                                                         \
+    X(ISM_OP_MIN_RC, ism_min(A, C))                                                         \
+    X(ISM_OP_MAX_RR, ism_max(A, B))                                                         \
+    X(ISM_OP_MAX_RC, ism_max(A, C))                                                         \
+    X(ISM_OP_NEG, -A)                                                                       \
+    X(ISM_OP_SQUARE, A * A)                                                                 \
+    X(ISM_OP_POWI, ism_powi(A, in->b))                                                      \
+    X(ISM_OP_POWC, ism_powc(A, C))                                                          \
+    X(ISM_OP_SQRT, ism_sqrt_clip(A))                                                        \
+    X(ISM_OP_SIN, trig_value(trig, A, true))                                                \
+    X(ISM_OP_COS, trig_value(trig, A, false))                                               \
+    X(ISM_OP_TAN, tan(A))                                                                   \
+    X(ISM_OP_EXP, exp(A))                                                                   \
+    X(ISM_OP_LOG, ism_log_clip(A))                                                          \
+    X(ISM_OP_ABS, fabs(A))
+_Static_assert(ISM_OP_COUNT == 26, "POINT_OPS names every operation (run_threaded's table)");
+
 /* One instruction's value from its first operand's value a. The two-register operations read
  * their second operand, register in->b, as r[in->b * stride + lane] inside their own case
- * (one point: stride 1, lane 0; a lane of ism_eval_points' registers: ISM_EVAL_BATCH and j),
- * so ism_eval_point pays no test of whether b exists and no load it does not use. Sines and
- * cosines go through the memo trig (never NULL: every workspace has one) inside their own
- * cases too, so the other operations pay no test for them. */
+ * (a lane of ism_eval_points' registers: ISM_EVAL_BATCH and j; one point of
+ * ism_eval_piece's: 1 and 0). */
 static inline __attribute__((always_inline)) double op_value(const ism_instr *in, double a,
                                                           const double *r, size_t stride,
                                                           size_t lane, ism_trig_cache *trig)
 {
-    double c = in->imm;
+#define A a
+#define B r[(size_t)in->b * stride + lane]
+#define C in->imm
+#define CASE(OP, E) case OP: return E;
     switch (in->op) {
-    case ISM_OP_CONST: return c;
-    case ISM_OP_COPY: return a;
-    case ISM_OP_ADD_RR: return a + r[(size_t)in->b * stride + lane];
-    case ISM_OP_ADD_RC: return a + c;
-    case ISM_OP_SUB_RR: return a - r[(size_t)in->b * stride + lane];
-    case ISM_OP_SUB_CR: return c - a;
-    case ISM_OP_MUL_RR: return a * r[(size_t)in->b * stride + lane];
-    case ISM_OP_MUL_RC: return a * c;
-    case ISM_OP_DIV_RR: return a / r[(size_t)in->b * stride + lane];
-    case ISM_OP_DIV_RC: return a / c;
-    case ISM_OP_DIV_CR: return c / a;
-    case ISM_OP_MIN_RR: return ism_min(a, r[(size_t)in->b * stride + lane]);
-    case ISM_OP_MIN_RC: return ism_min(a, c);
-    case ISM_OP_MAX_RR: return ism_max(a, r[(size_t)in->b * stride + lane]);
-    case ISM_OP_MAX_RC: return ism_max(a, c);
-    case ISM_OP_NEG: return -a;
-    case ISM_OP_SQUARE: return a * a;
-    case ISM_OP_POWI: return ism_powi(a, in->b);
-    case ISM_OP_POWC: return ism_powc(a, c);
-    case ISM_OP_SQRT: return ism_sqrt_clip(a);
-    case ISM_OP_SIN: return trig_value(trig, a, true);
-    case ISM_OP_COS: return trig_value(trig, a, false);
-    case ISM_OP_TAN: return tan(a);
-    case ISM_OP_EXP: return exp(a);
-    case ISM_OP_LOG: return ism_log_clip(a);
-    case ISM_OP_ABS: return fabs(a);
+    POINT_OPS(CASE)
     default: return NAN;
     }
+#undef CASE
+#undef A
+#undef B
+#undef C
+}
+
+/* The first n instructions of code at the point whose x, y, z are in r[0..3), by direct
+ * threading (GNU C's labels as values): each operation's code ends in its own test for the
+ * end and its own jump to the next instruction's code, where a switch in a loop paid a bound
+ * test, a table offset and the loop's test on every step. ism_eval_point on Klein bottle's
+ * tape (callgrind, klein25_mb.c mode 3, with its caller's loop): 424 -> 310 instructions a
+ * point. Bit for bit the switch's arithmetic (the same list, POINT_OPS). An operation code
+ * past the list gives NAN, as op_value's default. */
+static void run_threaded(const ism_instr *code, size_t n, double *r, ism_trig_cache *trig)
+{
+#define LABEL(OP, E) [OP] = &&L_##OP,
+    static const void *const next_op[256] = {
+        POINT_OPS(LABEL) [ISM_OP_COUNT ... 255] = &&L_BAD
+    };
+#undef LABEL
+    if (!n)
+        return;
+    const ism_instr *in = code, *const end = code + n;
+    goto *next_op[in->op];
+#define A r[in->a]
+#define B r[in->b]
+#define C in->imm
+#define STEP(OP, E)                                                                         \
+    L_##OP:                                                                                 \
+    r[in->out] = E;                                                                         \
+    if (++in == end)                                                                        \
+        return;                                                                             \
+    goto *next_op[in->op];
+    POINT_OPS(STEP)
+    STEP(BAD, NAN)
+#undef STEP
+#undef A
+#undef B
+#undef C
 }
 
 static inline __attribute__((always_inline)) double point_op(const ism_instr *in,
@@ -75,36 +124,23 @@ static inline __attribute__((always_inline)) double point_op(const ism_instr *in
 
 static unsigned natural_branch(const ism_instr *in, double a, const double *r);
 
-/* The first n instructions of t at (x, y, z) into ws->scalar; with record (a constant at
- * every call: the plain loop stays as it was), each kink's branch into ws->choice and the
- * number of kinks returned (0 without). */
-static inline __attribute__((always_inline)) size_t run_point(const ism_tape *t,
-                                                              ism_eval_ws *ws, size_t n,
-                                                              double x, double y, double z,
-                                                              bool record)
+/* ws->scalar with x, y, z in their registers. */
+static double *point_inputs(ism_eval_ws *ws, double x, double y, double z)
 {
-    size_t kinks = 0;
     double *r = ws->scalar;
     r[ISM_REG_X] = x;
     r[ISM_REG_Y] = y;
     r[ISM_REG_Z] = z;
-    for (size_t i = 0; i < n; i++) {
-        const ism_instr *in = &t->code[i];
-        if (record && ism_op_is_kink(in->op)) {
-            ws->choice[i] = (uint8_t)natural_branch(in, r[in->a], r);
-            kinks++;
-        }
-        r[in->out] = point_op(in, r, ws->trig);
-    }
-    return kinks;
+    return r;
 }
 
 double ism_eval_point(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z)
 {
     if (!ism_ws_fits(ws, t))
         return NAN;
-    run_point(t, ws, t->len, x, y, z, false);
-    return ws->scalar[t->result];
+    double *r = point_inputs(ws, x, y, z);
+    run_threaded(t->code, t->len, r, ws->trig);
+    return r[t->result];
 }
 
 bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
@@ -113,9 +149,10 @@ bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y,
     const ism_instr *top = ism_tape_top_minmax(t);
     if (!top || !ism_ws_fits(ws, t))
         return false;
-    run_point(t, ws, t->len - 1, x, y, z, false);
-    val[0] = ws->scalar[top->a];
-    val[1] = ws->scalar[top->b];
+    double *r = point_inputs(ws, x, y, z);
+    run_threaded(t->code, t->len - 1, r, ws->trig);
+    val[0] = r[top->a];
+    val[1] = r[top->b];
     return true;
 }
 
@@ -136,7 +173,16 @@ ism_piece ism_eval_piece(const ism_tape *t, ism_eval_ws *ws, double x, double y,
 {
     if (!ism_ws_fits(ws, t))
         return ISM_PIECE_NONE;
-    size_t kinks = run_point(t, ws, t->len, x, y, z, true);
+    double *r = point_inputs(ws, x, y, z);
+    size_t kinks = 0;
+    for (size_t i = 0; i < t->len; i++) {
+        const ism_instr *in = &t->code[i];
+        if (ism_op_is_kink(in->op)) {
+            ws->choice[i] = (uint8_t)natural_branch(in, r[in->a], r);
+            kinks++;
+        }
+        r[in->out] = point_op(in, r, ws->trig);
+    }
     return kinks > ISM_PIECE_KINKS ? ISM_PIECE_NONE : ism_piece_walk(t, ws, kinks, NULL);
 }
 
@@ -157,10 +203,7 @@ double ism_eval_piece_value(const ism_tape *t, ism_eval_ws *ws, ism_piece pc, do
 {
     if (!ism_ws_fits(ws, t))
         return NAN;
-    double *r = ws->scalar;
-    r[ISM_REG_X] = x;
-    r[ISM_REG_Y] = y;
-    r[ISM_REG_Z] = z;
+    double *r = point_inputs(ws, x, y, z);
     unsigned k = 0;
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];
@@ -348,7 +391,7 @@ void ism_eval_batch(const ism_tape *t, ism_eval_ws *ws, const double *x, const d
 
 /* One instruction over n lanes of registers ISM_EVAL_BATCH apart: the frequent operations as
  * loops, the rest lane by lane through op_value (sines and cosines through the memo trig) —
- * each lane's arithmetic is run_point's. */
+ * each lane's arithmetic is run_threaded's. */
 static void narrow_op(const ism_instr *in, double *regs, ism_trig_cache *trig, size_t n)
 {
     double *restrict o = regs + (size_t)in->out * ISM_EVAL_BATCH;

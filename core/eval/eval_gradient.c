@@ -91,103 +91,235 @@ INLINE void dual_chain(ism_dual *out, double g, double g1, const ism_dual *a)
     dst(out, d);
 }
 
-/* One instruction in place: the frequent operations written out (the same arithmetic as
- * dual_op, without building and copying a value per step), the others through dual_op.
- * Inlined into each tape loop (a call per instruction cost as much as the arithmetic). */
+/* One instruction in place, each operation its own step: the frequent ones written out (the
+ * same arithmetic as dual_op, without building and copying a value per step), the others
+ * through dual_op. Each is inlined into the tape loops (a call per instruction cost as much
+ * as the arithmetic). o is the output register, a the first operand's. */
+#define STEP(NAME) INLINE void NAME(const ism_instr *in, ism_dual *r, ism_trig_cache *trig, \
+                                    ism_dual *o, const ism_dual *a)
+
+STEP(step_add_rr)
+{
+    (void)trig;
+    dst(o, dld(a) + dld(&r[in->b]));
+}
+
+STEP(step_sub_rr)
+{
+    (void)trig;
+    dst(o, dld(a) - dld(&r[in->b]));
+}
+
+STEP(step_mul_rr) /* v = a b; d = a' b + a b' (each lane in that order) */
+{
+    (void)trig;
+    v4d va = dld(a);
+    v4d vb = dld(&r[in->b]);
+    v4d left = va * splat(vb[0]);
+    v4d d = left + splat(va[0]) * vb;
+    d[0] = left[0];
+    dst(o, d);
+}
+
+STEP(step_add_rc)
+{
+    (void)r, (void)trig;
+    dual_chain(o, a->v + in->imm, 1.0, a);
+}
+
+STEP(step_mul_rc)
+{
+    (void)r, (void)trig;
+    dual_chain(o, a->v * in->imm, in->imm, a);
+}
+
+STEP(step_square)
+{
+    (void)in, (void)r, (void)trig;
+    dual_chain(o, a->v * a->v, 2.0 * a->v, a);
+}
+
+STEP(step_sin)
+{
+    (void)in, (void)r;
+    double sv, cv;
+    ism_trig_pair(trig, a->v, &sv, &cv);
+    dual_chain(o, sv, cv, a);
+}
+
+STEP(step_cos)
+{
+    (void)in, (void)r;
+    double sv, cv;
+    ism_trig_pair(trig, a->v, &sv, &cv);
+    dual_chain(o, cv, -sv, a);
+}
+
+STEP(step_max_rr)
+{
+    (void)trig;
+    const ism_dual *b = &r[in->b];
+    *o = a->v > b->v ? *a : *b;
+}
+
+STEP(step_min_rr)
+{
+    (void)trig;
+    const ism_dual *b = &r[in->b];
+    *o = a->v < b->v ? *a : *b;
+}
+
+/* the one-operand steps of CSG and distance tapes, ism_unary_chain's g and g' written out
+ * (through dual_op they cost cube-minus-ball ~810 instructions a gradient) */
+STEP(step_copy)
+{
+    (void)in, (void)r, (void)trig;
+    dual_chain(o, a->v, 1.0, a);
+}
+
+STEP(step_neg)
+{
+    (void)in, (void)r, (void)trig;
+    dual_chain(o, -a->v, -1.0, a);
+}
+
+STEP(step_sub_cr)
+{
+    (void)r, (void)trig;
+    dual_chain(o, in->imm - a->v, -1.0, a);
+}
+
+STEP(step_div_rc)
+{
+    (void)r, (void)trig;
+    dual_chain(o, a->v / in->imm, 1.0 / in->imm, a);
+}
+
+STEP(step_min_rc)
+{
+    (void)r, (void)trig;
+    dual_chain(o, ism_min(a->v, in->imm), a->v < in->imm ? 1.0 : 0.0, a);
+}
+
+STEP(step_max_rc)
+{
+    (void)r, (void)trig;
+    dual_chain(o, ism_max(a->v, in->imm), a->v > in->imm ? 1.0 : 0.0, a);
+}
+
+STEP(step_abs)
+{
+    (void)in, (void)r, (void)trig;
+    dual_chain(o, fabs(a->v), a->v < 0.0 ? -1.0 : a->v > 0.0 ? 1.0 : 0.0, a);
+}
+
+STEP(step_sqrt)
+{
+    (void)in, (void)r, (void)trig;
+    double g = ism_sqrt_clip(a->v);
+    dual_chain(o, g, a->v > 0.0 ? 0.5 / g : 0.0, a);
+}
+
+/* integer powers and exp, ism_unary_chain's g and g' written out (its g'' unasked): through
+ * dual_op a power cost chmutov-quartic's x^4 about 225 instructions, exp catenoid's cosh
+ * about 60 besides exp itself */
+STEP(step_powi)
+{
+    (void)r, (void)trig;
+    unsigned n = in->b;
+    double g, p2;
+    ism_powi_chain(a->v, n, &g, &p2);
+    dual_chain(o, g, n * (p2 * a->v), a);
+}
+
+STEP(step_exp)
+{
+    (void)in, (void)r, (void)trig;
+    double g = exp(a->v);
+    dual_chain(o, g, g, a);
+}
+
+STEP(step_other)
+{
+    (void)a;
+    *o = dual_op(in, r, trig);
+}
+#undef STEP
+
+/* Every operation and its step: one list that dual_step's switch and THREADED_STEPS' labels
+ * both expand, so that the two cannot differ. */
+#define DUAL_STEPS(X)                                                                       \
+    X(ISM_OP_CONST, step_other)                                                             \
+    X(ISM_OP_COPY, step_copy)                                                               \
+    X(ISM_OP_ADD_RR, step_add_rr)                                                           \
+    X(ISM_OP_ADD_RC, step_add_rc)                                                           \
+    X(ISM_OP_SUB_RR, step_sub_rr)                                                           \
+    X(ISM_OP_SUB_CR, step_sub_cr)                                                           \
+    X(ISM_OP_MUL_RR, step_mul_rr)                                                           \
+    X(ISM_OP_MUL_RC, step_mul_rc)                                                           \
+    X(ISM_OP_DIV_RR, step_other)                                                            \
+    X(ISM_OP_DIV_RC, step_div_rc)                                                           \
+    X(ISM_OP_DIV_CR, step_other)                                                            \
+    X(ISM_OP_MIN_RR, step_min_rr)                                                           \
+    X(ISM_OP_MIN_RC, step_min_rc)                                                           \
+    X(ISM_OP_MAX_RR, step_max_rr)                                                           \
+    X(ISM_OP_MAX_RC, step_max_rc)                                                           \
+    X(ISM_OP_NEG, step_neg)                                                                 \
+    X(ISM_OP_SQUARE, step_square)                                                           \
+    X(ISM_OP_POWI, step_powi)                                                               \
+    X(ISM_OP_POWC, step_other)                                                              \
+    X(ISM_OP_SQRT, step_sqrt)                                                               \
+    X(ISM_OP_SIN, step_sin)                                                                 \
+    X(ISM_OP_COS, step_cos)                                                                 \
+    X(ISM_OP_TAN, step_other)                                                               \
+    X(ISM_OP_EXP, step_exp)                                                                 \
+    X(ISM_OP_LOG, step_other)                                                               \
+    X(ISM_OP_ABS, step_abs)
+_Static_assert(ISM_OP_COUNT == 26, "DUAL_STEPS names every operation (THREADED_STEPS' table)");
+
+/* One instruction in place, chosen by a switch (the piece gradient's loop, which steps
+ * instruction by instruction between its forced kinks). */
 INLINE void dual_step(const ism_instr *in, ism_dual *r, ism_trig_cache *trig)
 {
     ism_dual *o = &r[in->out];
     const ism_dual *a = &r[in->a];
+#define CASE(OP, FN) case OP: FN(in, r, trig, o, a); return;
     switch (in->op) {
-    case ISM_OP_ADD_RR:
-        dst(o, dld(a) + dld(&r[in->b]));
-        return;
-    case ISM_OP_SUB_RR:
-        dst(o, dld(a) - dld(&r[in->b]));
-        return;
-    case ISM_OP_MUL_RR: { /* v = a b; d = a' b + a b' (each lane in that order) */
-        v4d va = dld(a), vb = dld(&r[in->b]);
-        v4d left = va * splat(vb[0]), d = left + splat(va[0]) * vb;
-        d[0] = left[0];
-        dst(o, d);
-        return;
+    DUAL_STEPS(CASE)
+    default: step_other(in, r, trig, o, a);
     }
-    case ISM_OP_ADD_RC:
-        dual_chain(o, a->v + in->imm, 1.0, a);
-        return;
-    case ISM_OP_MUL_RC:
-        dual_chain(o, a->v * in->imm, in->imm, a);
-        return;
-    case ISM_OP_SQUARE:
-        dual_chain(o, a->v * a->v, 2.0 * a->v, a);
-        return;
-    case ISM_OP_SIN:
-    case ISM_OP_COS: {
-        double sv, cv;
-        ism_trig_pair(trig, a->v, &sv, &cv);
-        if (in->op == ISM_OP_SIN)
-            dual_chain(o, sv, cv, a);
-        else
-            dual_chain(o, cv, -sv, a);
-        return;
-    }
-    case ISM_OP_MAX_RR: {
-        const ism_dual *b = &r[in->b];
-        *o = a->v > b->v ? *a : *b;
-        return;
-    }
-    case ISM_OP_MIN_RR: {
-        const ism_dual *b = &r[in->b];
-        *o = a->v < b->v ? *a : *b;
-        return;
-    }
-    /* the one-operand steps of CSG and distance tapes, ism_unary_chain's g and g' written
-     * out (through dual_op they cost cube-minus-ball ~810 instructions a gradient) */
-    case ISM_OP_COPY:
-        dual_chain(o, a->v, 1.0, a);
-        return;
-    case ISM_OP_NEG:
-        dual_chain(o, -a->v, -1.0, a);
-        return;
-    case ISM_OP_SUB_CR:
-        dual_chain(o, in->imm - a->v, -1.0, a);
-        return;
-    case ISM_OP_DIV_RC:
-        dual_chain(o, a->v / in->imm, 1.0 / in->imm, a);
-        return;
-    case ISM_OP_MIN_RC:
-        dual_chain(o, ism_min(a->v, in->imm), a->v < in->imm ? 1.0 : 0.0, a);
-        return;
-    case ISM_OP_MAX_RC:
-        dual_chain(o, ism_max(a->v, in->imm), a->v > in->imm ? 1.0 : 0.0, a);
-        return;
-    case ISM_OP_ABS:
-        dual_chain(o, fabs(a->v), a->v < 0.0 ? -1.0 : a->v > 0.0 ? 1.0 : 0.0, a);
-        return;
-    case ISM_OP_SQRT: {
-        double g = ism_sqrt_clip(a->v);
-        dual_chain(o, g, a->v > 0.0 ? 0.5 / g : 0.0, a);
-        return;
-    }
-    /* integer powers and exp, ism_unary_chain's g and g' written out (its g'' unasked):
-       through dual_op a power cost chmutov-quartic's x^4 about 225 instructions, exp
-       catenoid's cosh about 60 besides exp itself */
-    case ISM_OP_POWI: {
-        unsigned n = in->b;
-        double g, p2;
-        ism_powi_chain(a->v, n, &g, &p2);
-        dual_chain(o, g, n * (p2 * a->v), a);
-        return;
-    }
-    case ISM_OP_EXP: {
-        double g = exp(a->v);
-        dual_chain(o, g, g, a);
-        return;
-    }
-    default:
-        *o = dual_op(in, r, trig);
-    }
+#undef CASE
 }
+
+/* The body of a function stepping code[0..n) on r in order, by direct threading (GNU C's
+ * labels as values): each step's code ends in its own test for the end and its own jump to
+ * the next instruction's step, where a switch in a loop paid a bound test, a table offset and
+ * the loop's test on every step. ism_eval_gradient on Klein bottle's tape (callgrind,
+ * klein25_mb.c mode 0, with its caller's loop): 608 -> 510 instructions a gradient, with
+ * run_steps_base below. An operation code past the list goes to dual_op, as
+ * dual_step's default. A macro, not a function: each clone below holds its own labels. */
+#define THREADED_STEPS(code, n, r, trig)                                                    \
+    do {                                                                                    \
+        DUAL_STEPS(DUAL_LABEL)                                                              \
+        static const void *const next_step[256] = {                                         \
+            DUAL_STEPS(DUAL_ENTRY)[ISM_OP_COUNT ... 255] = &&L_BAD };                       \
+        if (!(n))                                                                           \
+            break;                                                                          \
+        ism_dual *const regs = (r);                                                         \
+        ism_trig_cache *const memo = (trig);                                                \
+        const ism_instr *in = (code), *const end = (code) + (n);                            \
+        goto *next_step[in->op];                                                            \
+        DUAL_STEPS(DUAL_BODY)                                                               \
+        DUAL_BODY(BAD, step_other)                                                          \
+    } while (0)
+#define DUAL_LABEL(OP, FN) __label__ L_##OP;
+#define DUAL_ENTRY(OP, FN) [OP] = &&L_##OP,
+#define DUAL_BODY(OP, FN)                                                                   \
+    L_##OP:                                                                                 \
+    FN(in, regs, memo, &regs[in->out], &regs[in->a]);                                       \
+    if (++in == end)                                                                        \
+        break;                                                                              \
+    goto *next_step[in->op];
 
 /* ws's dual registers with x, y, z seeded (each its own unit derivative). */
 static inline __attribute__((always_inline)) ism_dual *dual_inputs(ism_eval_ws *ws, double x,
@@ -208,10 +340,18 @@ static inline __attribute__((always_inline)) ism_dual *dual_inputs(ism_eval_ws *
 ISM_AVX2_CLONE
 static void run_steps_avx2(const ism_instr *code, size_t n, ism_dual *r, ism_trig_cache *trig)
 {
-    for (size_t i = 0; i < n; i++)
-        dual_step(&code[i], r, trig);
+    THREADED_STEPS(code, n, r, trig);
 }
 #endif
+
+/* Its own function, not run_steps' fallback: there its prologue (the threaded loop's saved
+ * registers) was paid by every gradient, the AVX2 clone's too (klein25_mb.c: 28 instructions
+ * a gradient in run_steps). */
+static __attribute__((noinline)) void run_steps_base(const ism_instr *code, size_t n,
+                                                     ism_dual *r, ism_trig_cache *trig)
+{
+    THREADED_STEPS(code, n, r, trig);
+}
 
 static void run_steps(const ism_instr *code, size_t n, ism_dual *r, ism_trig_cache *trig)
 {
@@ -221,8 +361,7 @@ static void run_steps(const ism_instr *code, size_t n, ism_dual *r, ism_trig_cac
         return;
     }
 #endif
-    for (size_t i = 0; i < n; i++)
-        dual_step(&code[i], r, trig);
+    run_steps_base(code, n, r, trig);
 }
 
 double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y, double z,
