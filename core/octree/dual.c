@@ -429,11 +429,13 @@ static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, int k
     }
     if (nb >= BATCH_ENCLOSURES &&
         ism_eval_interval_grad_batch(w->s.tape, w->jet, (const ism_interval (*)[3])box,
-                                     (size_t)nb, g))
+                                     (size_t)nb, g)) {
         for (int k = 0; k < nb; k++) {
             views[at[k]].g = g[k];
             views[at[k]].pre_g = true;
         }
+        ism_dual_pre_models(w, kids, views, at, nb);
+    }
     for (int c = 0; c < 8; c++) {
         if (kind[c] == UNDECIDED)
             kind[c] = ism_dual_classify_tail(d, w, &kids[c], &views[c]);

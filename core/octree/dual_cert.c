@@ -23,6 +23,30 @@ bool ism_dual_taylor(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
            ism_eval_interval_grad(t, jet, mid, NULL, NULL, &m->at) == 0;
 }
 
+bool ism_dual_taylor_many(const ism_tape *t, ism_ivjet_ws *jet, const double (*lo)[3],
+                          const double (*hi)[3], size_t n, ism_dual_model *m, bool *ok)
+{
+    ism_interval mid[ISM_IVGRAD_BATCH][3];
+    ism_ivgrad at[ISM_IVGRAD_BATCH];
+    if (n > ISM_IVGRAD_BATCH)
+        return false;
+    for (size_t k = 0; k < n; k++) {
+        ism_interval box[3];
+        for (int a = 0; a < 3; a++) {
+            m[k].c[a] = 0.5 * lo[k][a] + 0.5 * hi[k][a];
+            box[a] = iv(lo[k][a], hi[k][a]);
+            mid[k][a] = iv(m[k].c[a], m[k].c[a]);
+        }
+        ok[k] = ism_eval_interval_jet(t, jet, box, NULL, NULL, &m[k].box) == 0;
+    }
+    /* after every jet: this batch's records replace those the jets took their values from */
+    if (!ism_eval_interval_grad_batch(t, jet, (const ism_interval (*)[3])mid, n, at))
+        return false;
+    for (size_t k = 0; k < n; k++)
+        m[k].at = at[k];
+    return true;
+}
+
 /* x − c over lo..hi, rounded outward. */
 static void round_centre(const ism_dual_model *m, const double lo[3], const double hi[3],
                          ism_interval dx[3])

@@ -37,6 +37,10 @@ typedef struct corner_view {
     /* In (classify_tail): f and ∇f's natural enclosure over the box is in g already, taken
      * in one batch with the node's siblings' (kid_kinds); classify_head clears it. */
     bool pre_g;
+    /* In (classify_tail's first tighten): the Taylor model over the box is in model already
+     * (ism_dual_pre_models), pre_ok its ism_dual_taylor answer, and the natural enclosure's
+     * tests before it are known to fail (not taken again); classify_head clears it. */
+    bool pre_model, pre_ok;
 } corner_view;
 
 /* classify_head's answer when the corners leave the node to classify_tail. */
@@ -88,6 +92,12 @@ static inline bool tail_wants_g(const dual *d, const corner_view *v)
  * corners (and sag_split) decide, else UNDECIDED, and ism_dual_classify_tail the rest (with
  * v->g taken beforehand when v->pre_g). */
 int ism_dual_classify(dual *d, worker *w, dnode *n, corner_view *v);
+/* After a batch of natural enclosures (kid_kinds: views[at[k]].pre_g for k < nb, classify_head
+ * UNDECIDED), the Taylor models the tails of nodes kids[at[k]] will take (the same test
+ * classify_tail makes before its first tighten) made at once (ism_dual_taylor_many), when
+ * there are at least two; bit for bit what tighten would make. */
+void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const int *at,
+                         int nb);
 int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v);
 int ism_dual_classify_tail(dual *d, worker *w, dnode *n, corner_view *v);
 
