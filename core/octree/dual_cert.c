@@ -112,6 +112,14 @@ bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[
     return over_dx(m, dx, second_order(m, dx), g);
 }
 
+bool ism_dual_over_v2(const ism_dual_model *m, const double lo[3], const double hi[3],
+                      ism_interval v2, ism_ivgrad *g)
+{
+    ism_interval dx[3];
+    round_centre(m, lo, hi, dx);
+    return over_dx(m, dx, v2, g);
+}
+
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                       const double hi[3], ism_ivgrad *g, uint64_t *intervals)
 {

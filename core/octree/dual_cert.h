@@ -50,6 +50,10 @@ bool ism_dual_taylor_many(const ism_tape *t, ism_ivjet_ws *jet, const double (*l
 bool ism_dual_over(const ism_dual_model *m, const double lo[3], const double hi[3],
                    ism_ivgrad *g);
 
+/* ism_dual_over with v2 = ism_dual_second_order(m, lo, hi) already taken (bit for bit). */
+bool ism_dual_over_v2(const ism_dual_model *m, const double lo[3], const double hi[3],
+                      ism_interval v2, ism_ivgrad *g);
+
 /* f over lo..hi (the model's box or one inside it) by the second-order Taylor form alone
  * (no meet with the other forms, no evaluation): the part of ism_dual_over a caller that
  * already met the natural and mean-value forms needs. */

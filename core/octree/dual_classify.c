@@ -222,11 +222,9 @@ static bool normals_agree(const double (*n)[3], double cos_min)
     return true;
 }
 
-/* v->g (the node's natural enclosure) replaced by the Taylor model's (dual_cert.h), the
- * model kept in v; false when that cannot be had (g kept). */
-static bool tighten(worker *w, corner_view *v)
+/* The node's Taylor model (dual_cert.h) into v->model: v->have_model. */
+static bool take_model(worker *w, corner_view *v)
 {
-    ism_ivgrad g;
     if (v->pre_model) { /* made beforehand (ism_dual_pre_models), counted now */
         v->pre_model = false;
         v->have_model = v->pre_ok;
@@ -234,7 +232,15 @@ static bool tighten(worker *w, corner_view *v)
     } else
         v->have_model = ism_dual_taylor(w->s.tape, w->jet, v->p[0], v->p[7], &v->model,
                                         &w->s.n_interval);
-    if (!v->have_model || !ism_dual_over(&v->model, v->p[0], v->p[7], &g))
+    return v->have_model;
+}
+
+/* v->g (the node's natural enclosure) replaced by the Taylor model's (dual_cert.h), the
+ * model kept in v; false when that cannot be had (g kept). */
+static bool tighten(worker *w, corner_view *v)
+{
+    ism_ivgrad g;
+    if (!take_model(w, v) || !ism_dual_over(&v->model, v->p[0], v->p[7], &g))
         return false;
     v->g = g;
     return true;
@@ -263,15 +269,26 @@ static bool prove_on_halves(dual *d, worker *w, const dnode *n, corner_view *v,
  * the sub-boxes. */
 static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
 {
-    for (int k = 0; k < 2; k++) {
-        bool known_open = k == 0 && v->pre_model; /* seen to fail by ism_dual_pre_models */
-        if (!known_open &&
-            (ism_dual_encl_free(&v->g) || mean_value_free(n, &v->g, v->p[0], v->p[7])))
-            return true;
-        if (k == 0 && !tighten(w, v))
-            return false;
-    }
-    /* v->g is the model's enclosure of the whole box (tighten), just seen to hold 0 */
+    bool known_open = v->pre_model; /* seen to fail by ism_dual_pre_models */
+    if (!known_open &&
+        (ism_dual_encl_free(&v->g) || mean_value_free(n, &v->g, v->p[0], v->p[7])))
+        return true;
+    if (!take_model(w, v))
+        return false;
+    /* tighten's enclosure, its cheapest part first (dual_cert.c verdict_of's order): when
+     * the second-order form alone keeps f from 0, so does the enclosure's value (its meet
+     * with two more forms), and its ∇f bounds are not needed; nothing reads v->g of an empty
+     * node. Torus at 1e-2: ~200 of ~500 models. */
+    ism_interval v2 = ism_dual_second_order(&v->model, v->p[0], v->p[7]);
+    if (v2.lo > 0 || v2.hi < 0)
+        return true;
+    ism_ivgrad g;
+    if (!ism_dual_over_v2(&v->model, v->p[0], v->p[7], v2, &g))
+        return false;
+    v->g = g;
+    if (ism_dual_encl_free(&v->g) || mean_value_free(n, &v->g, v->p[0], v->p[7]))
+        return true;
+    /* v->g is the model's enclosure of the whole box, just seen to hold 0 */
     return prove_on_halves(d, w, n, v, NULL, true);
 }
 

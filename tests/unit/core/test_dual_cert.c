@@ -551,3 +551,37 @@ Test(dual_cert, models_made_at_once_are_the_models_made_one_by_one)
     ism_ivjet_ws_free(jw);
     ism_tape_free(t);
 }
+
+/* empty_proven's order (dual_classify.c): when f's second-order form alone keeps f from 0 over
+ * a box, the model's enclosure (ism_dual_over: that form met with the natural and mean-value
+ * ones) does too, with the same sign, so its ∇f bounds need not be taken; and
+ * ism_dual_over_v2 with that form given is ism_dual_over to the bit. The torus's tube cells
+ * in three sizes and three placements; both kinds of cell (form one-signed or not) occur. */
+Test(dual_cert, second_order_form_first_decides_as_the_enclosure)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    cr_assert(jw);
+    int seen[2] = {0, 0};
+    for (int i = 0; i < TUBE_CELLS; i++) {
+        double lo[3], hi[3];
+        tube_cell(i, lo, hi);
+        ism_dual_model m;
+        uint64_t n = 0;
+        if (!ism_dual_taylor(t, jw, lo, hi, &m, &n))
+            continue;
+        ism_interval v2 = ism_dual_second_order(&m, lo, hi);
+        ism_ivgrad g, g2;
+        bool ok = ism_dual_over(&m, lo, hi, &g), ok2 = ism_dual_over_v2(&m, lo, hi, v2, &g2);
+        cr_assert_eq(ok, ok2, "cell %d", i);
+        cr_assert(!ok || memcmp(&g, &g2, sizeof g) == 0, "cell %d", i);
+        bool one_signed = v2.lo > 0 || v2.hi < 0;
+        seen[one_signed]++;
+        if (one_signed)
+            cr_assert(ok && (v2.lo > 0 ? g.v.lo > 0 : g.v.hi < 0), "cell %d: [%a, %a]", i,
+                      g.v.lo, g.v.hi);
+    }
+    cr_assert(seen[0] > 100 && seen[1] > 100, "%d / %d", seen[0], seen[1]);
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
