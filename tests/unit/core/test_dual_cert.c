@@ -290,6 +290,15 @@ static double tube_cell(int i, double lo[3], double hi[3])
     return s;
 }
 
+/* Tube cell i into lo..hi and its Taylor model into *m; false when there is none. */
+static bool tube_model(const ism_tape *t, ism_ivjet_ws *jw, int i, double lo[3], double hi[3],
+                       ism_dual_model *m)
+{
+    uint64_t n = 0;
+    tube_cell(i, lo, hi);
+    return ism_dual_taylor(t, jw, lo, hi, m, &n);
+}
+
 /* ism_dual_free and ism_dual_graph_along give the rule's verdicts (they try the second-order
  * form first and the sub-boxes most nearly centred on f = 0 first: an order, no new proof)
  * on cells of three sizes round the torus's tube, as placed and moved off the lattice by
@@ -450,10 +459,8 @@ Test(dual_cert, sub_box_forms_are_their_own_forms)
     size_t boxes = 0;
     for (int i = 0; i < 2592; i += 7) {
         double lo[3], hi[3];
-        tube_cell(i, lo, hi);
         ism_dual_model m;
-        uint64_t n = 0;
-        if (!ism_dual_taylor(t, jw, lo, hi, &m, &n))
+        if (!tube_model(t, jw, i, lo, hi, &m))
             continue;
         for (int at = 0; at < 3; at++) {
             double mid[3], frac = at == 1 ? 0.3 : 0.7;
@@ -565,10 +572,8 @@ Test(dual_cert, second_order_form_first_decides_as_the_enclosure)
     int seen[2] = {0, 0};
     for (int i = 0; i < TUBE_CELLS; i++) {
         double lo[3], hi[3];
-        tube_cell(i, lo, hi);
         ism_dual_model m;
-        uint64_t n = 0;
-        if (!ism_dual_taylor(t, jw, lo, hi, &m, &n))
+        if (!tube_model(t, jw, i, lo, hi, &m))
             continue;
         ism_interval v2 = ism_dual_second_order(&m, lo, hi);
         ism_ivgrad g, g2;
