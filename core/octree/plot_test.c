@@ -59,6 +59,35 @@
  * most seen) 414.7M -> 427.3M; mesh_identity.py 217 of 217 identical. */
 #define CREASE_CELL_ERRORS 4.0
 
+/* Where f's crease is read off its smooth pieces (crease_split.h's pieces mode) a node whose
+ * corners lie on two pieces is judged by its polygons cut along the crease (crease_cell) up
+ * to this many bounds across, and one whose corners show three or more pieces (a junction:
+ * a cube's corner) up to CREASE_JUNCTION_ERRORS, when every piece is a plane over the node
+ * (PLANE_PIECE_COS); past them the corner test decides, as for any node. Without these the
+ * only crease-aware judgement was that of f's top min/max, and the cube, max(|x|, |y|, |z|)
+ * − 1, has none: every crease node went to the corner test, whose uncut polygons across a
+ * 90° crease miss E until depth 7 (152 / 296 / 584 nodes refused at depths 4 / 5 / 6,
+ * crease25), and the quality pass then cost 1.29–1.33 times the polygonisation (callgrind).
+ * Measured, cube, --quality good, default bound (E 4.5e-3), the five cusp22 boxes own / 1e-3
+ * / irr / c037 / 1e-4: with no limit the raw mesh is 768 triangles, exact, but the pass
+ * loses corner vertices and leaves 8.7–8.9° triangles there (its junction fans too coarse);
+ * both limits 24 E (nodes of 18 E, depth 5 of the ±1.3 box): 2,064 raw, 20.4–21.5°, pass /
+ * polygonise 0.94 / 0.97 / 1.10 / 1.06 / 0.96 (env hooks); two pieces 40 E (36 E, depth 4), junctions
+ * 24 E: 1,248 raw, 16.8 / 18.9 / 12.4 / 17.1 / 16.8° (main: 18.1 / 14.5 / 10.1 / 12.9 /
+ * 17.9°), pass / polygonise 0.90 / 0.92 / 0.86 / 0.87 / 0.91 (main 1.29 own, 1.30 irr, 1.33
+ * c037; the whole run 499M -> 67M own); 80 E for two pieces: 7.3–10.0°. */
+#define CREASE_PIECES_ERRORS 40.0
+#define CREASE_JUNCTION_ERRORS 24.0
+
+/* The pieces' judgement of a node (CREASE_PIECES_ERRORS) only where each piece's corner
+ * gradients are one direction up to rounding: planes over the node (the cube's faces; not
+ * the balls of three-balls or steinmetz's cylinders). Curved pieces in coarse cells changed
+ * nothing in the raw mesh at three-balls' triple points (the same 66 vertices within 0.03 of
+ * the lower one in the irrational box) yet the quality pass then left 1.05–8.7° triangles
+ * there (own / 1e-3 / c037 / 1e-4 boxes) and lost the triple point's vertex: that is the
+ * pass's (core/remesh's junction crowd), to lift this when it keeps them. */
+#define PLANE_PIECE_COS (1 - 1e-12)
+
 /* The screen of graph_node_passes: a polygon's triangles err less than the sag at its
  * centroid (a quad's diagonal midpoint is its centroid; a fan's triangles lie between the
  * centre on f = 0 and the sides), so a node whose roots' centroid lies several bounds off
@@ -88,6 +117,8 @@ static bool no_roots(ism_sampler *s, const ism_flatness *fl, const ism_corners *
     double t;
     return ism_double_root_search(s, &prm, k->p[c0], k->p[c1], k->f[c0], k->f[c1], &t) == 0;
 }
+
+static double min_side(const double lo[3], const double hi[3]);
 
 /* The branch of f's top min/max at corner c (ism_crease_branch), through the thread's memo
  * when there is one (only asked while the node's tape keeps that min/max: crease_cell). */
@@ -158,6 +189,86 @@ static bool one_branch_graph(ism_sampler *s, ism_ivjet_ws *jet, const ism_corner
     return ism_graph_certified_piece(t, jet, k->p[0], k->p[7], force, &s->n_interval);
 }
 
+/* The corners' labels by f's top min/max branch (corner_branch): true when the node's
+ * corners lie on both branches. */
+static bool branch_labels(ism_sampler *s, const ism_corners *k, ism_piece branch[8])
+{
+    int seen = 0;
+    for (int c = 0; c < 8; c++) { /* labels first: most nodes lie on one branch */
+        int b = corner_branch(s, k, c);
+        if (b < 0)
+            return false;
+        branch[c] = (ism_piece)b;
+        seen |= 1 << b;
+    }
+    return seen == 3;
+}
+
+/* The corners' unit normals n (f's gradients) in at most `most` directions, PLANE_PIECE_COS
+ * apart: the screen before any piece is evaluated (a curved sheet's eight corners point
+ * eight ways; the gyroid ball's nodes stop here). */
+static bool few_directions(const ism_corners *k, double n[8][3], int most)
+{
+    int dir[8], ndir = 0;
+    for (int c = 0; c < 8; c++) {
+        memcpy(n[c], k->g[c], sizeof n[c]);
+        double len = ism_normalise3(n[c]);
+        if (!(len > 0) || !isfinite(len))
+            return false;
+        int d = 0;
+        while (d < ndir && !(ism_dot3(n[c], n[dir[d]]) >= PLANE_PIECE_COS))
+            d++;
+        if (d == ndir) {
+            if (ndir == most)
+                return false;
+            dir[ndir++] = c;
+        }
+    }
+    return true;
+}
+
+/* Each piece's corner normals n one direction (PLANE_PIECE_COS): planes over the node. */
+static bool plane_pieces(const double n[8][3], const ism_piece branch[8])
+{
+    for (int i = 0; i < 8; i++)
+        for (int j = i + 1; j < 8; j++)
+            if (branch[i] == branch[j] && !(ism_dot3(n[i], n[j]) >= PLANE_PIECE_COS))
+                return false;
+    return true;
+}
+
+/* A node's corners show at most this many smooth pieces where they are planes (few_
+ * directions' screen): a cube's corner shows three faces. */
+#define PLANE_PIECES_MOST 4
+
+/* In pieces mode, the corners' labels by their smooth piece (ism_eval_piece, the labels
+ * ism_crease_split cuts by), for a node within CREASE_PIECES_ERRORS (two pieces) or
+ * CREASE_JUNCTION_ERRORS (more) whose pieces are planes: how many pieces the corners show
+ * (2, or 3 for three or more); 0 where the node is not judged so. */
+static int piece_labels(ism_sampler *s, const ism_flatness *fl, const double lo[3],
+                        const double hi[3], const ism_corners *k, ism_piece branch[8])
+{
+    double size = min_side(lo, hi), n[8][3];
+    if (!(size <= CREASE_PIECES_ERRORS * fl->max_error) ||
+        !few_directions(k, n, PLANE_PIECES_MOST))
+        return 0;
+    ism_piece other = ISM_PIECE_NONE;
+    int np = 1;
+    for (int c = 0; c < 8; c++) {
+        s->n_point++;
+        branch[c] = ism_eval_piece(s->tape, s->ws, k->p[c][0], k->p[c][1], k->p[c][2]);
+        if (branch[c] == ISM_PIECE_NONE)
+            return 0;
+        if (branch[c] != branch[0] && branch[c] != other) {
+            np = other == ISM_PIECE_NONE ? 2 : 3;
+            other = branch[c];
+        }
+    }
+    if (np == 1 || (np == 3 && !(size <= CREASE_JUNCTION_ERRORS * fl->max_error)))
+        return 0;
+    return plane_pieces(n, branch) ? np : 0;
+}
+
 /* Under an error bound, a node whose corners lie on both branches of f's top min/max (a
  * CSG crease may pass through it): f's own corner gradients mix the two branches' and never
  * agree, so the node is judged by each branch's gradients at its own corners instead, and
@@ -166,20 +277,17 @@ static bool one_branch_graph(ism_sampler *s, ism_ivjet_ws *jet, const ism_corner
  * gyroid ball at E = 3e-3 (box ±1.5, depth 7): 312,508 -> 45,482 triangles; at 1e-3, depth
  * 10: 586,994 -> 117,882, max centroid distance 2.3e-3 -> 1.18e-3. */
 static int crease_cell(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
-                       const ism_corners *k, bool critical)
+                       const double lo[3], const double hi[3], const ism_corners *k,
+                       bool critical)
 {
     static const double any[2] = {0, 0};
-    if (ism_top_active_branch(s->tape, any) < 0)
+    ism_piece branch[8];
+    bool pieces = s->crease_pieces && piece_labels(s, fl, lo, hi, k, branch) > 0;
+    if (!pieces && ism_top_active_branch(s->tape, any) < 0)
         return -1; /* the node's tape has no top min/max left: no label (crease_split.h) */
-    double n[8][3];
-    int branch[8], seen = 0;
-    for (int c = 0; c < 8; c++) { /* labels first: most nodes lie on one branch */
-        if ((branch[c] = corner_branch(s, k, c)) < 0)
-            return -1;
-        seen |= 1 << branch[c];
-    }
-    if (seen != 3)
+    if (!pieces && !branch_labels(s, k, branch))
         return -1;
+    double n[8][3];
     /* two corners of one branch whose normals part past normal_cos, or a corner where its
      * branch's gradient or f's (critical) vanishes (its normal is no direction: only the
      * certificate can vouch for the node). f's is asked apart: at a corner on the crease
@@ -188,7 +296,10 @@ static int crease_cell(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl
      * (test_plot_test_tie.c). */
     bool disagree = critical;
     for (int c = 0; c < 8; c++) {
-        corner_gradient(s, k, c, n[c]);
+        if (pieces) /* a corner's own piece: f's gradient there */
+            memcpy(n[c], k->g[c], sizeof n[c]);
+        else
+            corner_gradient(s, k, c, n[c]);
         double len = ism_normalise3(n[c]);
         disagree |= !(len > 0) || !isfinite(len);
     }
@@ -329,7 +440,7 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
      * and the nodes round them were split as singular whatever E, 1,016 triangles against
      * the sphere's 344 at E 3e-2). Elsewhere such a corner is singular or a critical point
      * of f the node may hide: look closer. */
-    int crease = fl->max_error > 0 ? crease_cell(s, jet, fl, k, critical) : -1;
+    int crease = fl->max_error > 0 ? crease_cell(s, jet, fl, lo, hi, k, critical) : -1;
     if (crease >= 0)
         return passes(crease, may_be_blind, n, fl->normal_cos, blind);
     if (critical)
