@@ -34,8 +34,9 @@
 
 #include "core/remesh/rm_pass.h"
 
-/* Room for every triangle and vertex the pass may hold (r.cap_tris, r.cap_verts), nothing
- * known yet. False when out of memory. rm_pass_close frees it. */
+/* Room for every triangle and vertex the pass may hold (r.cap_tris, r.cap_verts): no
+ * triangle's point known yet, every vertex's offset where it stands (rm_normals'
+ * found_offset, taken and freed). False when out of memory. rm_pass_close frees it. */
 bool rm_brec_open(rm_pass *p);
 
 /* Doubles per vertex of rm_pass.bend: a box (low corner, high corner) and how fast f's unit
@@ -120,10 +121,10 @@ void rm_brec_moved(rm_pass *p, uint32_t v, const double x[3]);
 static inline void rm_brec_drop(rm_pass *p) { p->cen_keep_v = UINT32_MAX; }
 
 /* The signed distance rm_bound_signed measures at v's place: as kept for that place
- * (rm_brec_offset_set), bit for bit what it would measure (f is pure), or measured. A
- * relaxation move keeps a vertex's offset off f = 0 (rm_relax.c): each of the gyroid-ball's
- * 73,631 moves tried asked it where the vertex stood (97M instructions), though only its
- * own moves change it. */
+ * (rm_brec_open: every vertex's place as the pass found it; rm_brec_offset_set), bit for
+ * bit what it would measure (f is pure), or measured. A relaxation move keeps a vertex's
+ * offset off f = 0 (rm_relax.c): each of the gyroid-ball's 73,631 moves tried asked it
+ * where the vertex stood (97M instructions), though only its own moves change it. */
 double rm_brec_offset(rm_pass *p, uint32_t v);
 /* v is to be at x (rm_commit_move): its offset there is kept (a lookup when x was just
  * measured; nothing without records). */

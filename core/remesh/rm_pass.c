@@ -68,6 +68,7 @@ bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
     free(p->cen_keep);
     free(p->brec);
     free(p->offset);
+    free(p->found_offset);
     free(p->bend);
     ism_ivjet_ws_free(p->jws);
     ism_eval_ws_free(p->ws);

@@ -150,6 +150,9 @@ typedef struct rm_pass {
                                pass (rm_brec.c): its centroid's and edge midpoints' last
                                points measured and bounds on their distances */
     double *offset;         /* 4 per vertex, with brec: a place and rm_bound_signed there */
+    double *found_offset;   /* per vertex of the mesh found, or NULL: rm_bound_signed at
+                               its place then, from rm_normals' evaluation (rm_brec_open
+                               takes them into offset and frees this) */
     size_t brec_known, brec_skipped; /* points whose slot held them, and of those the ones
                                         the plain bound spares (rm_brec_pays) */
     double *bend;           /* RM_BREC_BEND_REC per vertex, with brec: a box about its fan and

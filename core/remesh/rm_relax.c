@@ -64,6 +64,9 @@ bool rm_normals(rm_pass *p)
     if (!gn)
         return false;
     size_t n = 0;
+    /* f at every vertex, kept for its first offset (NULL when out of memory: each measured
+       when asked, rm_brec_offset) */
+    double *fs = p->found_offset = malloc((nv ? nv : 1) * sizeof *p->found_offset);
     /* ∇f at every vertex, a chunk of the batched evaluator at a time (bit for bit
        ism_eval_gradient's, a NaN's sign aside (eval.h): a NaN gradient's vertex is no
        normal's either way; at under half the instructions a point on chmutov-quartic) */
@@ -74,7 +77,8 @@ bool rm_normals(rm_pass *p)
             const double *q = m->pos + 3 * (v0 + i);
             x[i] = q[0], y[i] = q[1], z[i] = q[2];
         }
-        ism_eval_gradient_batch(p->f, p->ws, x, y, z, fv, (double (*)[3])(p->normal + 3 * v0), c);
+        ism_eval_gradient_batch(p->f, p->ws, x, y, z, fs ? fs + v0 : fv,
+                                (double (*)[3])(p->normal + 3 * v0), c);
     }
     for (size_t v = 0; v < nv; v++) {
         const double *g = p->normal + 3 * v;
@@ -87,6 +91,8 @@ bool rm_normals(rm_pass *p)
     for (size_t v = 0; v < nv; v++) {
         double *g = p->normal + 3 * v, len = sqrt(ism_dot3(g, g));
         double s = isfinite(len) && len > p->gthresh ? 1 / len : 0;
+        if (fs) /* rm_bound_signed's first step (rm_bound.c first_step_from), bit for bit */
+            fs[v] = !isfinite(fs[v]) || !(len > p->gthresh) ? INFINITY : fs[v] / len;
         for (int k = 0; k < 3; k++)
             g[k] *= s;
     }

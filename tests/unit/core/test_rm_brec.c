@@ -160,3 +160,62 @@ Test(remesh_brec, a_bump_between_the_vertices_is_not_carried_over)
         cr_expect_gt(boxes, 0, "placement %d: no turn bounded", o);
     }
 }
+
+/* Every vertex's first offset is kept when the records open (rm_brec_open, from rm_normals'
+ * batch): the record holds the vertex's place, and its offset is what rm_bound_signed
+ * measures there one point at a time (no memo: afresh), bit for bit. The vertices of a
+ * polygonised ring torus pushed off it along ∇f by 0 to 0.9 of the bound, and one more at the
+ * origin, where ∇f vanishes (no offset: infinite both ways); each finite offset is also the
+ * torus's closed-form distance to second order (test_rm_distances' 8 d²). In the box on the
+ * lattice and both shifted ones. */
+Test(remesh_brec, the_first_offsets_kept_at_open_are_the_ones_measured)
+{
+    static const double box0[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert(t && ws);
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6], e = 3e-3;
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_sweep_box(box0, 5, which, box);
+        pf_run(t, box, 3, 5, 1, &m, &st);
+        for (size_t v = 0; v < m.nverts; v++) { /* pushed by (v mod 10) tenths of e */
+            double *x = m.pos + 3 * v, g[3];
+            ism_eval_gradient(t, ws, x[0], x[1], x[2], g);
+            double l = sqrt(g[0] * g[0] + g[1] * g[1] + g[2] * g[2]);
+            for (int k = 0; k < 3; k++)
+                x[k] += (double)(v % 10) / 10 * e * g[k] / l;
+        }
+        float n0[3] = {0, 0, 1};
+        uint32_t origin = ism_mesh_add_vertex(&m, (double[3]){0, 0, 0}, n0);
+        cr_assert_neq(origin, UINT32_MAX);
+        ism_remesh_options o = {.f = t, .max_error = e};
+        rm_pass p;
+        cr_assert(rm_pass_open(&p, &m, &o, 0));
+        p.bounded = true;
+        cr_assert(rm_brec_open(&p));
+        size_t finite = 0;
+        for (uint32_t v = 0; v < m.nverts; v++) {
+            const double *x = m.pos + 3 * (size_t)v;
+            cr_assert(memcmp(p.offset + 4 * (size_t)v, x, 3 * sizeof *x) == 0,
+                      "vertex %u: no offset kept for its place", v);
+            double kept = rm_brec_offset(&p, v), fresh = rm_bound_signed(&p, x);
+            cr_assert(memcmp(&kept, &fresh, sizeof kept) == 0,
+                      "vertex %u: kept %.17g, measured %.17g", v, kept, fresh);
+            if (v == origin) {
+                cr_assert(isinf(kept), "the origin's offset %g", kept);
+                continue;
+            }
+            double d = pf_ring_torus_dist(x);
+            cr_assert(fabs(fabs(kept) - d) <= 8 * d * d + 1e-15, "vertex %u: offset %.17g, "
+                      "distance %.17g", v, kept, d);
+            finite++;
+        }
+        cr_assert_eq(finite, m.nverts - 1);
+        rm_pass_close(&p, m.nverts, m.ntris, NULL);
+        ism_mesh_free(&m);
+    }
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
