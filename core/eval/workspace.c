@@ -7,6 +7,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Does t take a sine or a cosine (the trig cache's size, trig_pair.h)? */
+static bool takes_trig(const ism_tape *t)
+{
+    for (size_t i = 0; i < t->len; i++)
+        if (t->code[i].op == ISM_OP_SIN || t->code[i].op == ISM_OP_COS)
+            return true;
+    return false;
+}
+
 ism_eval_ws *ism_eval_ws_new(const ism_tape *t)
 {
     if (!t)
@@ -29,14 +38,15 @@ ism_eval_ws *ism_eval_ws_new(const ism_tape *t)
     ws->jet = ism_line_alloc(n * sizeof *ws->jet);
     ws->choice = ism_line_alloc(cap);
     ws->needed = ism_line_alloc(n);
-    ws->trig = ism_line_alloc(sizeof *ws->trig);
+    unsigned trig_bits = takes_trig(t) ? ISM_TRIG_CACHE_BITS : ISM_TRIG_CACHE_SMALL_BITS;
+    ws->trig = ism_line_alloc(ism_trig_cache_size(trig_bits));
     if (!ws->trig || !ws->batch || !ws->scalar || !ws->iv || !ws->iv_lo || !ws->iv_hi || !ws->dual || !ws->gbatch || !ws->jet || !ws->choice
         || !ws->needed) {
         ism_eval_ws_free(ws);
         return NULL;
     }
     memset(ws->batch, 0, n * ISM_EVAL_BATCH * sizeof(double));
-    ism_trig_cache_init(ws->trig);
+    ism_trig_cache_init(ws->trig, trig_bits);
     return ws;
 }
 

@@ -5,7 +5,9 @@
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
+#include "core/eval/workspace.h"
 #include "test_eval_surfaces.h"
 
 typedef struct deriv_case {
@@ -183,6 +185,42 @@ Test(eval_deriv, sines_and_cosines_of_many_arguments)
         cr_expect_float_eq(g[2], gz, 1e-12, "d/dz at point %zu", i);
     }
     ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
+
+/* The sincos memo's two sizes (trig_pair.h: the larger for a tape that takes sines or
+ * cosines, the smaller for one that does not): a workspace of either size evaluates sines
+ * and cosines of more arguments than it holds, each repeated after the others, bit for bit
+ * what sin and cos return, the gradient's as the value's. */
+Test(eval_deriv, sines_and_cosines_through_either_memo_size)
+{
+    ism_error err;
+    ism_tape *t = ism_tape_compile("sin(x)*cos(y)", NULL, 0, NULL, 0, NULL, &err);
+    ism_tape *plain = ism_tape_compile("x*y + y*z + z*x + x*x*y - z*z*(x + 1)", NULL, 0, NULL,
+                                       0, NULL, &err);
+    cr_assert(t && plain);
+    ism_eval_ws *ws[2] = {ism_eval_ws_new(t), ism_eval_ws_new(plain)};
+    cr_assert(ws[0] && ws[1]);
+    cr_assert_eq(ws[0]->trig->mask, (1u << ISM_TRIG_CACHE_BITS) - 1);
+    cr_assert_eq(ws[1]->trig->mask, (1u << ISM_TRIG_CACHE_SMALL_BITS) - 1);
+    const int n = 3 << ISM_TRIG_CACHE_BITS; /* each argument's slot taken again in between */
+    for (int w = 0; w < 2; w++)
+        for (int pass = 0; pass < 2; pass++)
+            for (int i = 0; i < n; i++) {
+                double x = 0.37 * i - 11.0, y = -0.011 * i, g[3];
+                double want = sin(x) * cos(y);
+                double got = ism_eval_point(t, ws[w], x, y, 0);
+                cr_assert(memcmp(&got, &want, sizeof got) == 0, "memo %d, pass %d, x %.17g, y "
+                          "%.17g: %.17g, sin and cos give %.17g", w, pass, x, y, got, want);
+                got = ism_eval_gradient(t, ws[w], x, y, 0, g);
+                cr_assert(memcmp(&got, &want, sizeof got) == 0, "memo %d, pass %d, x %.17g: "
+                          "gradient's f %.17g", w, pass, x, got);
+                cr_assert_float_eq(g[0], cos(x) * cos(y), 1e-15, "memo %d, x %.17g", w, x);
+                cr_assert_float_eq(g[1], -sin(x) * sin(y), 1e-15, "memo %d, x %.17g", w, x);
+            }
+    ism_eval_ws_free(ws[0]);
+    ism_eval_ws_free(ws[1]);
+    ism_tape_free(plain);
     ism_tape_free(t);
 }
 
