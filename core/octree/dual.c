@@ -902,7 +902,7 @@ bool ism_dual_wanted(const ism_tape *f, const ism_poly_options *o)
     return ism_dual_declined_before(f, &asked) == ISM_DUAL_WHY_NONE;
 }
 
-/* The round's triangles measured; where every miss is a side just past E those sides are cut
+/* The round's triangles measured; where every miss is a side a few E off those sides are cut
  * (dual_sides.h: nothing to mark), else the leaves round the misses are marked
  * (ism_dual_mark_misses). Returns the leaves marked; the misses at max_depth into *missed. */
 static size_t mark_round(dual *d, uint64_t *missed)

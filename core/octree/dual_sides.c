@@ -1,5 +1,5 @@
 /* dual_sides.c — a round's misses mended without a split leaf (dual_sides.h): when every miss
- * is a side between two leaves' vertices just past E, each side's two triangles are cut in
+ * is a side between two leaves' vertices a few E off, each side's two triangles are cut in
  * two at a vertex on the side's midpoint's foot, the halves measured, and the cut kept or
  * rolled back. Finding the missed sides, placing the side vertices (kept by pair key for a
  * retry), halving the triangles and the roll-back live here; measuring is dual_measure.c's. */
@@ -13,17 +13,23 @@
 
 /* A side is cut (ism_dual_split_sides) only while its midpoint lies within this many E of f = 0.
  * Its halves sag a quarter as far (a chord's sag grows with its length squared): under the
- * straddle move a side 2 E off sags 2.9 E, its halves 0.73 E, within E with room to spare;
- * a side farther off is an early round's, and its halves' triangles could be worse than the
- * round's finer leaves. Measured (bench_error mesh S E 10, one thread, triangles and rounds):
- * the sphere at E 0.0141 (the bench's 1e-2 setting) missed on nothing but twelve sides
- * between level-3 leaves at 1.023 E (feet 0.46 apart: the radial foot of a centre 0.82 from
- * the origin spreads the leaves' spacing 0.375 by 1 / 0.82), a whole second round (24 leaves
- * split, 2.1M of its 4.8M instructions, 456 triangles) for twelve edges: now 384 triangles,
- * none; the torus at 0.0141 missed on twelve sides at 1.55-1.59 E: 1,144 -> 1,008 triangles
- * and no round at 1.75 to 2.5 (1.5: unchanged); at 3 the sphere at 1.3e-3 split its first
- * mesh's sides instead of a round's leaves, 4,284 -> 4,524 triangles. */
-#define SIDE_SPLIT_MAX 2.0
+ * straddle move (ends 0.9 E outside) a side 3 E off sags 3.9 E, its halves 0.98 E, their
+ * midpoints back within 0.1 E of f = 0; the halves are measured all the same, and the cut
+ * kept only when every one meets E. A side farther off is an early round's, and its halves'
+ * triangles could be worse than the round's finer leaves. Measured (bench_error mesh S E 10,
+ * one thread, callgrind on ism_mesh_surface): the sphere at E 0.0141 (the bench's 1e-2
+ * setting) missed on nothing but twelve sides between level-3 leaves at 1.023 E (the radial
+ * foot of a centre 0.82 from the origin spreads the leaves' spacing 0.375 by 1 / 0.82), a
+ * whole second round for twelve edges: cut, 456 -> 384 triangles, 4.83M -> 2.89M
+ * instructions; the torus at 0.0141 missed on twelve sides at 1.55-1.59 E: 1,144 -> 1,008
+ * triangles and no round (from 1.75 up). At 2 the sphere at 1.3e-3 (the bench's 1e-3
+ * setting) still ran a round for 24 sides between level-4 leaves at 2.55 E beside 48 at
+ * 1.19 E (one more level of 48 leaves, the walk and the measure again: 38.1M, 4,284
+ * triangles); at 3 they are cut: 33.2M (-12.9%), 4,524 triangles, the same max centroid
+ * distance 8.4e-4. Every preset at its default bound in the three placements: 121 of 126
+ * meshes the same, ellipsoid 836 / 832 / 846 -> 756 / 752 / 754 and blob-pair own / 1e-3
+ * 1,984 / 2,024 -> 1,776 / 1,786 triangles, within E as before. */
+#define SIDE_SPLIT_MAX 3.0
 
 /* Task k (job: in the pair keys, out the points): the midpoint of the pair as a vertex
  * (ism_dual_vertex_onto, within the pair's length), as dual_measure.c's fan_task makes a

@@ -1,5 +1,5 @@
 /* dual_sides.h — the dual mesher's last round mended by cutting sides, not leaves: where
- * every miss of a round is a side just past E, the sides are cut instead of a round of split
+ * every miss of a round is a side a few E off, the sides are cut instead of a round of split
  * leaves (a sphere-like surface's last round was often a whole level of leaves split for a
  * few chords a hair too long). */
 #ifndef ISM_DUAL_SIDES_H
