@@ -76,7 +76,7 @@ static inline bool keyed_reserve(keyed *k, size_t more)
 /* Sets key's value; out of memory, nothing is kept (a memo then recomputes, no more). */
 static inline void keyed_put(keyed *k, uint64_t key, double val)
 {
-    if (!keyed_get(k, key) && !keyed_reserve(k, 1))
+    if (!keyed_reserve(k, 1) && !keyed_get(k, key)) /* room first: one probe, not two */
         return;
     size_t i = keyed_slot(k, key);
     k->n += !k->key[i];

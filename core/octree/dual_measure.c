@@ -209,9 +209,10 @@ void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t
     uint32_t *pairs = malloc((n ? n : 1) * 6 * sizeof *pairs);
     uint32_t *cen = malloc((n ? n : 1) * sizeof *cen);
     size_t *at = malloc((n ? n : 1) * sizeof *at);
+    uint64_t *tkey = malloc((n ? n : 1) * sizeof *tkey); /* the open triangles' tri_key */
     uint8_t *emiss = malloc(n ? n : 1), *cmiss = malloc(n ? n : 1);
     double *pdist = malloc((n ? n : 1) * 3 * sizeof *pdist); /* NULL: mid_dist looks up */
-    if (!open || !pairs || !cen || !at || !emiss || !cmiss) {
+    if (!open || !pairs || !cen || !at || !tkey || !emiss || !cmiss) {
         d->nomem = true;
         goto done;
     }
@@ -222,6 +223,7 @@ void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t
         if ((key && keyed_get(&d->passed, key)) || (d->inner && clip_of(d, t) == CLIP_DROPS))
             continue;
         at[np] = k;
+        tkey[np] = key;
         open[np++] = t;
         for (int e = 0; e < 3; e++) {
             pairs[6 * (np - 1) + 2 * e] = d->tri[3 * t + e];
@@ -239,15 +241,15 @@ void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t
     for (size_t k = 0, c = 0; k < np; k++) {
         int m = emiss[k] ? emiss[k] : cmiss[c++];
         miss[at[k]] = (uint8_t)m;
-        uint64_t key = m ? 0 : tri_key(d, open[k]);
-        if (key)
-            keyed_put(&d->passed, key, 0); /* out of memory: measured again, no more */
+        if (!m && tkey[k])
+            keyed_put(&d->passed, tkey[k], 0); /* out of memory: measured again, no more */
     }
 done:
     free(open);
     free(pairs);
     free(cen);
     free(at);
+    free(tkey);
     free(emiss);
     free(cmiss);
     free(pdist);
