@@ -470,10 +470,16 @@ static bool merged_fan_ok(rm_pass *p, const rm_merge *g, const double *x,
 }
 
 /* v merged into its neighbour w beside the crease too, w put on the crease nearest their
- * middle (two vertices of the two surfaces crowding at the crease become one on it). True
- * when done; false also when out of memory (rm_merge_apply then changes nothing). */
+ * middle (two vertices of the two surfaces crowding at the crease become one on it); when v
+ * is on a junction (locked and rm_junction_vertex_on), w merged into v where v is
+ * instead: merged away or moved to the pair's middle it would leave the junction (the cube
+ * with its crease cells stopped by the cut polygons' error, crease25's c775dd5: edges 0.025
+ * long at a corner, then 0.2; corner (-1, -1, -1) merged into (-1, -1, -0.975), the nearest
+ * vertex 0.012 off it, 8.65° beside it). *junction: whether v is one, once asked (-1
+ * before: snap_merge's tries share the answer). True when done; false also when out of
+ * memory (rm_merge_apply then changes nothing). */
 static bool merge_onto_crease(rm_pass *p, uint32_t v, uint32_t w, const crease_fan *c,
-                              const rm_fan *f)
+                              const rm_fan *f, int *junction)
 {
     const rm_mesh *r = &p->r;
     crease_fan cw;
@@ -484,13 +490,23 @@ static bool merge_onto_crease(rm_pass *p, uint32_t v, uint32_t w, const crease_f
         !rm_merge_link_ok(r, &g))
         return false;
     double x[3], mid[3], grad[3];
-    rm_midpoint(rm_pos(p, v), rm_pos(p, w), mid);
-    memcpy(x, mid, sizeof x);
     crease_frame cf;
     bool framed = false;
-    if (!to_crease(p, c->f, x, f->mean_edge, &cf, &framed) ||
-        !(rm_dist(x, mid) <= reach_tol(p, f->mean_edge)) ||
-        !merged_fan_ok(p, &g, x, framed ? &cf : NULL))
+    if (*junction < 0)
+        *junction = r->locked[v] && rm_junction_vertex_on(p, v);
+    if (*junction) {
+        if (!rm_merge_find_any(r, w, v, ISM_RM_COLLAPSE_MAX_DEGREE, &g) ||
+            !rm_merge_link_ok(r, &g))
+            return false;
+        memcpy(x, rm_pos(p, v), sizeof x);
+    } else {
+        rm_midpoint(rm_pos(p, v), rm_pos(p, w), mid);
+        memcpy(x, mid, sizeof x);
+        if (!to_crease(p, c->f, x, f->mean_edge, &cf, &framed) ||
+            !(rm_dist(x, mid) <= reach_tol(p, f->mean_edge)))
+            return false;
+    }
+    if (!merged_fan_ok(p, &g, x, framed ? &cf : NULL))
         return false;
     ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], grad);
     if (!(ism_norm3(grad) > p->gthresh))
@@ -499,14 +515,14 @@ static bool merge_onto_crease(rm_pass *p, uint32_t v, uint32_t w, const crease_f
     if (!rm_merge_apply(&p->r, &g, fan, &n))
         return false;
     rm_cbound_drop(p);
-    rm_commit_move(p, w, x, grad);
-    for (uint32_t i = 0; i < r->count[w]; i++) {
-        const uint32_t *t = r->m->tri + 3 * (size_t)r->vt[r->start[w] + i];
+    rm_commit_move(p, g.w, x, grad);
+    for (uint32_t i = 0; i < r->count[g.w]; i++) {
+        const uint32_t *t = r->m->tri + 3 * (size_t)r->vt[r->start[g.w] + i];
         for (int k = 0; k < 3; k++)
             p->active[t[k]] = 1;
     }
-    p->active[v] = p->slide[v] = 0;
-    p->r.locked[w] = 1; /* on the crease now: kept there */
+    p->active[g.v] = p->slide[g.v] = 0;
+    p->r.locked[g.w] = 1; /* on the crease now: kept there */
     p->collapses++;
     return true;
 }
@@ -534,10 +550,11 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
         near[j] = c->ring[i], dist[j] = d;
     }
     double after = 0; /* the last one tried was this far */
+    int junction = -1;  /* v a junction's vertex: not asked yet */
     for (uint32_t j = 0, tries = 0; j < n && tries < ISM_RM_CREASE_MERGE_TRIES; j++) {
         if (!(dist[j] > after) || rm_junction_vertex(p, near[j]))
             continue;
-        if (merge_onto_crease(p, v, near[j], c, f))
+        if (merge_onto_crease(p, v, near[j], c, f, &junction))
             return true;
         after = dist[j];
         tries++;
@@ -545,7 +562,12 @@ static bool snap_merge(rm_pass *p, uint32_t v, const crease_fan *c, const rm_fan
     return false;
 }
 
-/* Tries to move v onto the crease (snap) or along it (slide); true when it moved. */
+/* Tries to move v onto the crease (snap) or along it (slide); true when it moved. A
+ * junction's vertex (locked: on its creases, rm_locks.c; and rm_junction_vertex_on) is not
+ * slid: along one of its creases it leaves the junction (the cube with its crease cells
+ * stopped by the cut polygons' error, crease25's c775dd5: a corner slid to (-0.990, -1, -1)).
+ * Asked only of a move about to be made, after every other test (each a measure that
+ * changes nothing, so the same moves are made). */
 static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
 {
     rm_fan f;
@@ -577,6 +599,8 @@ static bool slide_vertex(rm_pass *p, uint32_t v, ism_tape *local)
         ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
         if (!(ism_norm3(g) > p->gthresh) || !rm_centroids_stay(p, v, x))
             continue;
+        if (p->r.locked[v] && rm_junction_vertex_on(p, v))
+            return false; /* a junction's vertex stays */
         rm_commit_move(p, v, x, g);
         p->r.locked[v] = 1; /* on the crease: kept there (the relaxation would move it off) */
         return true;

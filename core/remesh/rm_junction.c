@@ -9,29 +9,29 @@
  * good triangles (17.8°-23.4°, none under 10°).
  *
  * A cluster grows from a needle's edge between two locked vertices, the vertex nearest that
- * edge's middle joining first: a locked neighbour of the cluster, or a vertex off it that its
- * rim passes twice or not at all (the cluster wraps round it), within ISM_RM_JUNCTION_REACH
- * of the longest edge at the seed's ends; each cluster so grown, up to ISM_RM_JUNCTION_MAX
- * vertices, is tried when the ∇f normals at its rim fall into two sheets or more (rm_sheets,
- * rm_sheets.c, which also owns rm_junction_vertex, the crease merges' test). Two are
- * enough: beside the junction the crowd runs on along each crease (three-balls' own box: a
- * 6.89° needle from the lower triple point's crowd to two locked vertices 2.9e-3 apart
- * astride the first two balls' crease, 1.6e-2 out, which single merges refused too, and
- * whose collapse lets the triple point's own then keep its vertex); with three or more the
- * member nearest where the sheets' tangent planes meet, the junction's vertex, is the
- * target whenever it leaves no needle (it keeps the point; junction22's trial found the
- * best target elsewhere at times). A collapse renames every cluster vertex to one locked
- * target among them (it keeps its place, on its creases) and drops the triangles with two
- * corners or more in the cluster; it is taken only when the triangles touching the cluster
- * were a disc of one label, its inner edges on no caller's locked list (the curves stage's
- * creases stay as cut), whose rim is one cycle that each new triangle spans once (a disc
- * for a disc: χ, components, cones and boundaries kept exactly), every new triangle lies
- * within ISM_RM_CREASE_FACE_DEG of its own sheet's normal (∇f at one of its outer
+ * edge's middle joining first: a neighbour of the cluster (locked, or free: nearest_member), or
+ * a vertex off it that its rim passes twice or not at all (the cluster wraps round it), within
+ * ISM_RM_JUNCTION_REACH of the longest edge at the seed's ends; each cluster so grown, up to
+ * ISM_RM_JUNCTION_MAX vertices, is tried when the ∇f normals at its rim fall into two sheets or
+ * more (rm_sheets, rm_sheets.c, which also owns rm_junction_vertex, the crease merges' test).
+ * Two are enough: beside the junction the crowd runs on along each crease (three-balls' own
+ * box: a 6.89° needle from the lower triple point's crowd to two locked vertices 2.9e-3 apart
+ * astride the first two balls' crease, 1.6e-2 out, which single merges refused too, and whose
+ * collapse lets the triple point's own then keep its vertex); with three or more the member
+ * nearest where the sheets meet, the junction's vertex, is the target whenever it leaves no
+ * needle (it keeps the point; junction22's trial found the best target elsewhere at times), and
+ * the only one when it lies on that point (ISM_RM_JUNCTION_AT). A collapse renames every
+ * cluster vertex to one locked target among them (it keeps its place, on its creases) and drops
+ * the triangles with two corners or more in the cluster; it is taken only when the triangles
+ * touching the cluster were a disc of one label, its inner edges on no caller's locked list
+ * (the curves stage's creases stay as cut), whose rim is one cycle that each new triangle spans
+ * once (a disc for a disc: χ, components, cones and boundaries kept exactly), every new
+ * triangle lies within ISM_RM_CREASE_FACE_DEG of its own sheet's normal (∇f at one of its outer
  * corners, not its old normal: the cluster's triangles are 1e-4 across and their normals
  * noise), bends against its outer neighbour no more than the crease angle, than it did plus
- * ISM_RM_CROWD_BEND_DEG, or than f's curvature explains (rm_bend_is_curvature), makes no
- * crease through a free vertex, raises the star's smallest angle, and puts no new centroid
- * or midpoint farther from f = 0 than the farthest there before or in the mesh as found
+ * ISM_RM_CROWD_BEND_DEG, or than f's curvature explains (rm_bend_is_curvature), makes no crease
+ * through a free vertex, raises the star's smallest angle, and puts no new centroid or midpoint
+ * farther from f = 0 than the farthest there before or in the mesh as found
  * (rm_merge_distance_ok's rule). Of the clusters and targets that pass, the one with the
  * largest smallest angle is taken. */
 #include "core/remesh/rm_merge.h"
@@ -206,7 +206,7 @@ static int sheets(const rm_pass *p, junction *j, double x[3])
             if (!in_cluster(j, c[k]))
                 rm_sheets_add(p, &j->sheet, c[k]);
     }
-    if (j->sheet.n >= 3 && !rm_sheets_meet(&j->sheet, x))
+    if (j->sheet.n >= 3 && !rm_sheets_meet(p, &j->sheet, x))
         x[0] = x[1] = x[2] = NAN;
     return j->sheet.n;
 }
@@ -411,8 +411,14 @@ static uint32_t pinched(const rm_pass *p, const junction *j, const double *c)
     return best;
 }
 
-/* The nearest locked, unpinned neighbour of the cluster to c within reach, or UINT32_MAX. */
-static uint32_t nearest_locked(const rm_pass *p, const junction *j, const double *c,
+/* The nearest unpinned neighbour of the cluster to c within reach, locked or free, or
+ * UINT32_MAX. Free ones too: the insertions (rm_insert.c) split the needles beside a
+ * junction at free vertices, and one left on the rim makes the cone's triangles there as
+ * thin as before (three-balls at depth.max 5, own box: a free vertex 0.002 from the upper
+ * triple point, beside its fan of 0.001-0.002 edges, every cone over the rest of its crowd
+ * 0.69°-0.71° or failing; the crowd collapsed whole (the free ones simply go), none under
+ * 10° there). */
+static uint32_t nearest_member(const rm_pass *p, const junction *j, const double *c,
                                double reach)
 {
     const rm_mesh *r = &p->r;
@@ -424,8 +430,7 @@ static uint32_t nearest_locked(const rm_pass *p, const junction *j, const double
             for (int k = 0; k < 3; k++) {
                 uint32_t x = t[k];
                 double d = rm_dist(rm_pos(p, x), c);
-                if (r->locked[x] && r->locked[x] != RM_PINNED && !r->gone[x] &&
-                    !in_cluster(j, x) && d <= bd)
+                if (r->locked[x] != RM_PINNED && !r->gone[x] && !in_cluster(j, x) && d <= bd)
                     bd = d, best = x;
             }
         }
@@ -464,9 +469,10 @@ static void choose_target(rm_pass *p, const junction *j, int ns, const double x[
     for (int i = 1; at >= 0 && i < j->n; i++)
         if (rm_dist(rm_pos(p, j->v[i]), x) < rm_dist(rm_pos(p, j->v[at]), x))
             at = i;
+    bool own = at >= 0 && rm_dist(rm_pos(p, j->v[at]), x) <= ISM_RM_JUNCTION_AT * reach;
     for (int i = 0; i < j->n; i++) {
-        if (!p->r.locked[j->v[i]])
-            continue; /* a free vertex the cluster wrapped round is on no crease */
+        if (!p->r.locked[j->v[i]] || (own && i != at))
+            continue; /* a free vertex is on no crease; the junction's own vertex stays */
         double s = cone_score(p, j, j->v[i]);
         /* the junction's vertex keeps the point where the sheets meet: taken whenever it
            leaves no needle, otherwise the best target */
@@ -510,9 +516,9 @@ static bool mend_junction(rm_pass *p, uint32_t t, int most, bool *ok)
         if (j.n == ISM_RM_JUNCTION_MAX)
             break;
         /* the nearer of a vertex the cluster wraps round (locked or not: it lies inside) and
-           the nearest locked neighbour */
+           the nearest neighbour */
         uint32_t y = pinched(p, &j, mid);
-        uint32_t z = nearest_locked(p, &j, mid, reach);
+        uint32_t z = nearest_member(p, &j, mid, reach);
         if (y == UINT32_MAX || r->locked[y] == RM_PINNED || rm_dist(rm_pos(p, y), mid) > reach ||
             (z != UINT32_MAX && rm_dist(rm_pos(p, z), mid) < rm_dist(rm_pos(p, y), mid)))
             y = z;

@@ -294,6 +294,7 @@ size_t rm_junction_collapse(rm_pass *p, bool *ok);
 typedef struct rm_sheets {
     const double *normal[ISM_RM_COLLAPSE_MAX_DEGREE];
     double d[ISM_RM_COLLAPSE_MAX_DEGREE];
+    uint32_t v[ISM_RM_COLLAPSE_MAX_DEGREE]; /* each group's first vertex */
     int n;
 } rm_sheets;
 /* Adds v's normal to s (none where ∇f vanishes at v; none past ISM_RM_COLLAPSE_MAX_DEGREE
@@ -301,24 +302,41 @@ typedef struct rm_sheets {
 void rm_sheets_add(const rm_pass *p, rm_sheets *s, uint32_t v);
 /* True, x the point where the first three sheets' tangent planes meet, when s has three or
  * more and their normals span space enough for that point to be a junction
- * (ISM_RM_JUNCTION_DET). */
-bool rm_sheets_meet(const rm_sheets *s, double x[3]);
-/* v is a junction's vertex: the ∇f normals at v and the vertices up to two edges from it
- * fall into three sheets or more whose tangent planes (each through the sheet's vertex
- * nearest v) meet at a point (rm_sheets_meet) within v's mean edge, and v is nearer that
- * point than each neighbour. Two edges: in a crowd the junction's own fan may be three
- * triangles to crease vertices whose ∇f shows only two of the sheets (a crease vertex's
- * normal is one branch's; three-balls' own box, upper triple point). The polygoniser puts a
- * vertex on such a point (three balls' triple points, a cube's corners: within 1e-8). The
- * crease merges keep it: crease_merge_find (rm_collapse.c) does not merge it away, and
- * rm_crease_slide.c's merges onto a crease do not move it as the vertex that stays; it may
- * still go as the vertex merged there (kept from that too, three-balls' 1e-4 box kept a
- * 9.18° needle beside it that rm_junction.c's collapse into it could not mend; that box lost
- * it before as well), and rm_junction.c's clusters may collapse into it. False, without
- * looking, for v of more than ISM_RM_MERGE_MAX_DEGREE triangles (rm_merge.h): such a vertex
- * is not recognised as a junction's (crease_merge_find does not merge a vertex of that degree
- * anyway; snap_merge may then move it as the vertex that stays). */
+ * (ISM_RM_JUNCTION_DET); then taken on to where f's three smooth pieces there (eval.h
+ * ism_piece, each at its group's first vertex) all vanish, by Newton steps from it, when
+ * those converge (rm_sheets.c: a curved sheet's plane read 0.1 from the junction misses it
+ * by ~0.007 on three-balls). */
+bool rm_sheets_meet(const rm_pass *p, const rm_sheets *s, double x[3]);
+/* v is a junction's vertex: the ∇f normals at v and the vertices up to two edges from it fall
+ * into three sheets or more whose tangent planes (each through the sheet's vertex nearest v)
+ * meet at a point (rm_sheets_meet, taken on to the pieces' common zero) within v's mean edge,
+ * and v is nearer that point than each neighbour. Two edges: in a crowd the junction's own fan
+ * may be three triangles to crease vertices whose ∇f shows only two of the sheets (a crease
+ * vertex's normal is one branch's; three-balls' own box, upper triple point). The polygoniser
+ * puts a vertex on such a point (three balls' triple points, a cube's corners: within 1e-8).
+ * The crease merges keep it: crease_merge_find (rm_collapse.c) does not merge it away,
+ * rm_crease_slide.c does not move it as the vertex that stays and, when it lies on the point
+ * (rm_junction_vertex_on), merges its crowd into it where it is rather than it into them and
+ * does not slide it; rm_junction.c's clusters that hold it on the point collapse into it
+ * alone. False, without looking, for v of more than ISM_RM_MERGE_MAX_DEGREE
+ * triangles (rm_merge.h): such a vertex is not recognised as a junction's (crease_merge_find
+ * does not merge a vertex of that degree anyway; snap_merge may then move it as the vertex that
+ * stays). */
 bool rm_junction_vertex(const rm_pass *p, uint32_t v);
+/* A vertex within this × its mean edge (rm_junction_vertex_on; rm_junction.c: × the
+ * cluster's reach) of where the sheets meet (rm_sheets_meet: f's three pieces' common zero,
+ * to rounding) lies on the junction: the polygoniser puts a vertex there within 1e-8 of the
+ * box diagonal (three-balls: 4.4e-9, edges 0.006 at depth.max 7, 0.1 at 5), the crowd round
+ * it lies 1e-5 of an edge and more off (0.0004-0.0025 on three-balls), and without a bound
+ * the cube's nearest vertex to a corner, taken for its junction's by rm_junction_vertex,
+ * 0.0066 off (edges ~0.02). Only a vertex on the point is kept from every merge and slide:
+ * keeping the one nearest the corner in that unbounded cube took its smallest angle from
+ * 15.01° to 10.87°; and a cluster holding it collapses into it alone (three-balls at
+ * depth.max 5, 1e-3 box: its upper triple point collapsed into a crowd vertex 0.0017 off it
+ * for a cone of 1.05° against 0.86° into it). */
+#define ISM_RM_JUNCTION_AT 1e-4
+/* rm_junction_vertex, and v on the point (within ISM_RM_JUNCTION_AT × its mean edge). */
+bool rm_junction_vertex_on(const rm_pass *p, uint32_t v);
 /* rm_junction_vertex without its screen (third_sheet_possible, which only says no where the
  * grouping would): the tests' check that the screen changes no answer. */
 bool rm_junction_vertex_unscreened(const rm_pass *p, uint32_t v);

@@ -12,6 +12,7 @@
 #include "core/util/vec3.h"
 
 #include <math.h>
+#include <string.h>
 
 /* The three sheets' unit normals must span space at least this much (their triple product)
  * for the tangent planes' meeting point to be a junction: two normals the crease angle apart
@@ -29,6 +30,13 @@
  * screen (third_sheet_possible) passes gets there, and crowded crease vertices have degree
  * 6 to 8 (rm_junction.c's ISM_RM_JUNCTION_STAR), a few thousand compares (revE 4). */
 #define ISM_RM_JUNCTION_RING 96
+/* Newton steps onto the junction of three smooth pieces at most (onto_pieces), and the step,
+ * as a share of how far the planes were read from it, at which they have converged: they
+ * converge quadratically from the planes' point (three-balls' spheres read 0.1 off put it
+ * ~0.007 from the junction: three steps to 1e-10 of that, the next one to rounding); the
+ * cube's planes are its pieces (one step of 0). */
+#define ISM_RM_JUNCTION_NEWTON_STEPS 8
+#define ISM_RM_JUNCTION_NEWTON_TOL 1e-10
 
 void rm_sheets_add(const rm_pass *p, rm_sheets *s, uint32_t v)
 {
@@ -39,24 +47,74 @@ void rm_sheets_add(const rm_pass *p, rm_sheets *s, uint32_t v)
     int h = 0;
     while (h < s->n && !(ism_dot3(s->normal[h], n) >= near))
         h++;
-    if (h == s->n && s->n < ISM_RM_COLLAPSE_MAX_DEGREE)
-        s->d[s->n] = ism_dot3(n, rm_pos(p, v)), s->normal[s->n++] = n;
+    if (h == s->n && s->n < ISM_RM_COLLAPSE_MAX_DEGREE) {
+        s->d[s->n] = ism_dot3(n, rm_pos(p, v)), s->v[s->n] = v;
+        s->normal[s->n++] = n;
+    }
 }
 
-bool rm_sheets_meet(const rm_sheets *s, double x[3])
+/* Where the planes g[i] · x = d[i] meet (x), when their normals span space at least det_min
+ * (the triple product's size); false otherwise. */
+static bool planes_meet(const double *const g[3], const double d[3], double det_min,
+                        double x[3])
 {
-    const double *const *g = s->normal;
-    if (s->n < 3)
-        return false;
     double c12[3], c23[3], c31[3];
     ism_cross3(g[1], g[2], c23);
     ism_cross3(g[2], g[0], c31);
     ism_cross3(g[0], g[1], c12);
     double det = ism_dot3(g[0], c23);
-    if (!(fabs(det) >= ISM_RM_JUNCTION_DET))
+    if (!(fabs(det) >= det_min))
         return false;
     for (int k = 0; k < 3; k++)
-        x[k] = (s->d[0] * c23[k] + s->d[1] * c31[k] + s->d[2] * c12[k]) / det;
+        x[k] = (d[0] * c23[k] + d[1] * c31[k] + d[2] * c12[k]) / det;
+    return true;
+}
+
+/* x taken on to where the three pieces pc vanish: Newton steps, each to where the pieces'
+ * tangent planes at the last point meet (planes_meet, the normals' rule), at most
+ * ISM_RM_JUNCTION_NEWTON_STEPS; kept when a step falls under ISM_RM_JUNCTION_NEWTON_TOL × reach
+ * within reach of where it started (reach: how far from x the planes were read, so farther
+ * is another junction); x unchanged otherwise (a piece's gradient vanishing, the three
+ * turning parallel, no convergence). */
+static void onto_pieces(const rm_pass *p, const ism_piece pc[3], double reach, double x[3])
+{
+    double y[3] = {x[0], x[1], x[2]};
+    for (int step = 0; step < ISM_RM_JUNCTION_NEWTON_STEPS; step++) {
+        double grad[3][3], d[3], z[3];
+        const double *g[3] = {grad[0], grad[1], grad[2]};
+        for (int h = 0; h < 3; h++) {
+            double val = ism_eval_piece_gradient(p->f, p->ws, pc[h], y[0], y[1], y[2], grad[h]);
+            double len = ism_normalise3(grad[h]);
+            if (!isfinite(val) || !(len > 0) || !isfinite(len))
+                return;
+            d[h] = ism_dot3(grad[h], y) - val / len;
+        }
+        if (!planes_meet(g, d, ISM_RM_JUNCTION_DET, z))
+            return;
+        double moved = rm_dist(y, z);
+        memcpy(y, z, sizeof y);
+        if (!(rm_dist(x, y) <= reach))
+            return;
+        if (moved <= ISM_RM_JUNCTION_NEWTON_TOL * reach) {
+            memcpy(x, y, sizeof y);
+            return;
+        }
+    }
+}
+
+bool rm_sheets_meet(const rm_pass *p, const rm_sheets *s, double x[3])
+{
+    if (s->n < 3 || !planes_meet(s->normal, s->d, ISM_RM_JUNCTION_DET, x))
+        return false;
+    ism_piece pc[3];
+    double reach = 0;
+    for (int h = 0; h < 3; h++) {
+        const double *q = rm_pos(p, s->v[h]);
+        if ((pc[h] = ism_eval_piece(p->f, p->ws, q[0], q[1], q[2])) == ISM_PIECE_NONE)
+            return true; /* more kinks than a piece names: the planes' point */
+        reach = fmax(reach, rm_dist(q, x));
+    }
+    onto_pieces(p, pc, reach, x);
     return true;
 }
 
@@ -110,8 +168,9 @@ static bool third_sheet_possible(const rm_pass *p, uint32_t v, const uint32_t *n
     return false;
 }
 
-/* rm_junction_vertex past its screen: v's n neighbours nb, the ring's sheets. */
-static bool sheets_meet_at(const rm_pass *p, uint32_t v, const uint32_t *nb, int n)
+/* rm_junction_vertex past its screen: v's n neighbours nb, the ring's sheets; *off gets v's
+ * distance from the point as a share of its mean edge. */
+static bool sheets_meet_at(const rm_pass *p, uint32_t v, const uint32_t *nb, int n, double *off)
 {
     const rm_mesh *r = &p->r;
     uint32_t ring[ISM_RM_JUNCTION_RING];
@@ -128,7 +187,7 @@ static bool sheets_meet_at(const rm_pass *p, uint32_t v, const uint32_t *nb, int
     rm_sheets_add(p, &s, v);
     for (int i = 0; i < nr; i++)
         rm_sheets_add(p, &s, ring[i]);
-    if (!rm_sheets_meet(&s, x))
+    if (!rm_sheets_meet(p, &s, x))
         return false;
     double d = rm_dist(rm_pos(p, v), x);
     for (int i = 0; i < n; i++) {
@@ -137,6 +196,7 @@ static bool sheets_meet_at(const rm_pass *p, uint32_t v, const uint32_t *nb, int
             return false; /* a neighbour is nearer the junction */
         sum += rm_dist(rm_pos(p, v), rm_pos(p, nb[i]));
     }
+    *off = d / (sum / n);
     return d <= sum / n; /* the point within v's mean edge: the sheets meet at v */
 }
 
@@ -153,13 +213,24 @@ bool rm_junction_vertex(const rm_pass *p, uint32_t v)
 {
     uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
     int n;
+    double off;
     return neighbours(p, v, nb, &n) && third_sheet_possible(p, v, nb, n) &&
-           sheets_meet_at(p, v, nb, n);
+           sheets_meet_at(p, v, nb, n, &off);
+}
+
+bool rm_junction_vertex_on(const rm_pass *p, uint32_t v)
+{
+    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
+    int n;
+    double off;
+    return neighbours(p, v, nb, &n) && third_sheet_possible(p, v, nb, n) &&
+           sheets_meet_at(p, v, nb, n, &off) && off <= ISM_RM_JUNCTION_AT;
 }
 
 bool rm_junction_vertex_unscreened(const rm_pass *p, uint32_t v)
 {
     uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
     int n;
-    return neighbours(p, v, nb, &n) && sheets_meet_at(p, v, nb, n);
+    double off;
+    return neighbours(p, v, nb, &n) && sheets_meet_at(p, v, nb, n, &off);
 }
