@@ -368,6 +368,39 @@ static bool idle(rm_pass *p, uint32_t v)
     return true;
 }
 
+/* No vertex of v's fan is locked and no triangle with a corner there is under
+ * ISM_RM_INSERT_DEG: v lies more than a ring away from every protected vertex (point,
+ * crease, boundary) and needle, where remesh.c's ISM_RM_FAR_STEP is v's least step. */
+static bool far_from_features(rm_pass *p, uint32_t v)
+{
+    const rm_mesh *r = &p->r;
+    double needle = rm_insert_poor();
+    for (uint32_t i = 0; i < r->count[v]; i++) {
+        const uint32_t *t = r->m->tri + 3 * (size_t)r->vt[r->start[v] + i];
+        for (int k = 0; k < 3; k++) {
+            uint32_t u = t[k];
+            if (r->locked[u])
+                return false;
+            for (uint32_t j = 0; u != v && j < r->count[u]; j++)
+                if (!(rm_tri_sine(p, r->vt[r->start[u] + j]) >= needle))
+                    return false;
+        }
+    }
+    return true;
+}
+
+/* Whether v's step d (its fan f) is too short to try: under the least step (relax_min_step,
+ * or relax_far_step away from features) × the fan's mean edge, with no needle in its fan. */
+static bool step_too_short(rm_pass *p, uint32_t v, const double d[3], const rm_fan *f)
+{
+    double d2 = ism_dot3(d, d), e2 = f->mean_edge * f->mean_edge;
+    if (!(f->min_sine >= rm_collapse_poor()))
+        return false;
+    if (d2 < p->relax_min_step * p->relax_min_step * e2)
+        return true;
+    return d2 < p->relax_far_step * p->relax_far_step * e2 && far_from_features(p, v);
+}
+
 bool rm_relax_vertex(rm_pass *p, uint32_t v)
 {
     double *pos = p->r.m->pos + 3 * v, *n = p->normal + 3 * v;
@@ -379,10 +412,9 @@ bool rm_relax_vertex(rm_pass *p, uint32_t v)
     double dn = ism_dot3(d, n);
     for (int k = 0; k < 3; k++)
         d[k] -= dn * n[k];
-    if (ism_dot3(d, d) < p->relax_min_step * p->relax_min_step * f.mean_edge * f.mean_edge &&
-        f.min_sine >= rm_collapse_poor())
+    if (step_too_short(p, v, d, &f))
         return false; /* near enough its fan's centroid, no needle in its fan (remesh.c's
-                         ISM_RM_MIN_STEP) */
+                         ISM_RM_MIN_STEP, ISM_RM_FAR_STEP) */
     for (double step = 1; step >= 0.5; step *= 0.5) {
         double x[3] = {pos[0] + step * d[0], pos[1] + step * d[1], pos[2] + step * d[2]}, g[3];
         double tangent[3] = {x[0], x[1], x[2]};
