@@ -34,40 +34,43 @@ static ism_interval trig_op(int op, ism_interval a, ism_trig_cache *trig)
     return op == ISM_OP_SIN ? iv_sin_at(a, s1, s2) : iv_cos_at(a, c1, c2);
 }
 
-static ism_interval interval_op(const ism_instr *in, const ism_interval *r, uint8_t *choice,
-                                ism_trig_cache *trig)
+/* Every operation's interval, as an expression in A (its first operand's interval), B (its
+ * second operand's), C (its constant as a number), CC (the constant as an interval), CH (where
+ * a min, max or abs writes its choice) and trig (the sine memo): one list, expanded by
+ * ism_interval_run's labels. */
+#define INTERVAL_OPS(X)                                                                     \
+    X(ISM_OP_CONST, CC)                                                                     \
+    X(ISM_OP_COPY, A)                                                                       \
+    X(ISM_OP_ADD_RR, iv_add(A, B))                                                          \
+    X(ISM_OP_ADD_RC, iv_add_c(A, C))                                                        \
+    X(ISM_OP_SUB_RR, iv_sub(A, B))                                                          \
+    X(ISM_OP_SUB_CR, iv_c_sub(C, A))                                                        \
+    X(ISM_OP_MUL_RR, iv_mul(A, B))                                                          \
+    X(ISM_OP_MUL_RC, iv_mul_c(A, C))                                                        \
+    X(ISM_OP_DIV_RR, iv_div(A, B))                                                          \
+    X(ISM_OP_DIV_RC, iv_div_c(A, C))                                                        \
+    X(ISM_OP_DIV_CR, iv_c_div(C, A))                                                        \
+    X(ISM_OP_MIN_RR, (CH = min_choice(A, B), iv_min(A, B)))                                 \
+    X(ISM_OP_MIN_RC, (CH = min_choice(A, CC), iv_min(A, CC)))                               \
+    X(ISM_OP_MAX_RR, (CH = max_choice(A, B), iv_max(A, B)))                                 \
+    X(ISM_OP_MAX_RC, (CH = max_choice(A, CC), iv_max(A, CC)))                               \
+    X(ISM_OP_NEG, iv_neg(A))                                                                \
+    X(ISM_OP_SQUARE, iv_square(A))                                                          \
+    X(ISM_OP_POWI, iv_powi(A, in->b))                                                       \
+    X(ISM_OP_POWC, iv_powc(A, C))                                                           \
+    X(ISM_OP_SQRT, iv_sqrt(A))                                                              \
+    X(ISM_OP_SIN, trig_op(ISM_OP_SIN, A, trig))                                             \
+    X(ISM_OP_COS, trig_op(ISM_OP_COS, A, trig))                                             \
+    X(ISM_OP_TAN, iv_tan(A))                                                                \
+    X(ISM_OP_EXP, iv_exp(A))                                                                \
+    X(ISM_OP_LOG, iv_log(A))                                                                \
+    X(ISM_OP_ABS, (CH = abs_choice(A), iv_abs(A)))
+_Static_assert(ISM_OP_COUNT == 26, "INTERVAL_OPS names every operation (the label table)");
+
+/* abs's choice: its operand ≥ 0 over the box (1), < 0 (2), or either (0) */
+static inline uint8_t abs_choice(ism_interval a)
 {
-    ism_interval a = r[in->a];
-    double c = in->imm;
-    ism_interval cc = { c, c };
-    switch (in->op) {
-    case ISM_OP_CONST: return cc;
-    case ISM_OP_COPY: return a;
-    case ISM_OP_ADD_RR: return iv_add(a, r[in->b]);
-    case ISM_OP_ADD_RC: return iv_add_c(a, c);
-    case ISM_OP_SUB_RR: return iv_sub(a, r[in->b]);
-    case ISM_OP_SUB_CR: return iv_c_sub(c, a);
-    case ISM_OP_MUL_RR: return iv_mul(a, r[in->b]);
-    case ISM_OP_MUL_RC: return iv_mul_c(a, c);
-    case ISM_OP_DIV_RR: return iv_div(a, r[in->b]);
-    case ISM_OP_DIV_RC: return iv_div_c(a, c);
-    case ISM_OP_DIV_CR: return iv_c_div(c, a);
-    case ISM_OP_MIN_RR: *choice = min_choice(a, r[in->b]); return iv_min(a, r[in->b]);
-    case ISM_OP_MIN_RC: *choice = min_choice(a, cc); return iv_min(a, cc);
-    case ISM_OP_MAX_RR: *choice = max_choice(a, r[in->b]); return iv_max(a, r[in->b]);
-    case ISM_OP_MAX_RC: *choice = max_choice(a, cc); return iv_max(a, cc);
-    case ISM_OP_NEG: return iv_neg(a);
-    case ISM_OP_SQUARE: return iv_square(a);
-    case ISM_OP_POWI: return iv_powi(a, in->b);
-    case ISM_OP_POWC: return iv_powc(a, c);
-    case ISM_OP_SQRT: return iv_sqrt(a);
-    case ISM_OP_SIN: case ISM_OP_COS: return trig_op(in->op, a, trig);
-    case ISM_OP_TAN: return iv_tan(a);
-    case ISM_OP_EXP: return iv_exp(a);
-    case ISM_OP_LOG: return iv_log(a);
-    case ISM_OP_ABS: *choice = a.lo >= 0 ? ONLY_A : a.hi < 0 ? ONLY_B : BOTH; return iv_abs(a);
-    default: return ism_iv_whole();
-    }
+    return a.lo >= 0 ? ONLY_A : a.hi < 0 ? ONLY_B : BOTH;
 }
 
 static ism_interval sane_input(ism_interval v)
@@ -77,19 +80,47 @@ static ism_interval sane_input(ism_interval v)
     return v;
 }
 
+/* The tape by direct threading (GNU C's labels as values, as eval_double.c's run_threaded):
+ * each operation's code ends in its own test for the end and its own jump to the next
+ * instruction's, where a switch in a loop paid a bound test, a table offset and the loop's
+ * test on every step. An operation code past the list gives the whole line. */
 ism_interval ism_interval_run(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
                               ism_interval y, ism_interval z, uint8_t *choices)
 {
+#define LABEL(OP, E) [OP] = &&L_##OP,
+    static const void *const next_op[256] = {
+        INTERVAL_OPS(LABEL) [ISM_OP_COUNT ... 255] = &&L_BAD
+    };
+#undef LABEL
     ism_interval *r = ws->iv;
+    ism_trig_cache *trig = ws->trig;
     r[ISM_REG_X] = sane_input(x);
     r[ISM_REG_Y] = sane_input(y);
     r[ISM_REG_Z] = sane_input(z);
     uint8_t scratch = 0;
-    for (size_t i = 0; i < t->len; i++) {
-        const ism_instr *in = &t->code[i];
-        r[in->out] = ism_iv_sane(interval_op(in, r, choices ? &choices[i] : &scratch, ws->trig));
-    }
-    return r[t->result];
+    const ism_instr *in = t->code, *const end = t->code + t->len;
+    if (in == end)
+        return r[t->result];
+    goto *next_op[in->op];
+#define A r[in->a]
+#define B r[in->b]
+#define C in->imm
+#define CC ((ism_interval){ in->imm, in->imm })
+#define CH (*(choices ? &choices[in - t->code] : &scratch))
+#define STEP(OP, E)                                                                         \
+    L_##OP:                                                                                 \
+    r[in->out] = ism_iv_sane(E);                                                            \
+    if (++in == end)                                                                        \
+        return r[t->result];                                                                \
+    goto *next_op[in->op];
+    INTERVAL_OPS(STEP)
+    STEP(BAD, ism_iv_whole())
+#undef STEP
+#undef A
+#undef B
+#undef C
+#undef CC
+#undef CH
 }
 
 ism_interval ism_eval_interval(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
