@@ -16,7 +16,6 @@
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
 #include <stdint.h>
-#include <string.h>
 
 #define GL ISM_GRAD_BATCH
 #define VL 4 /* lanes per group: one AVX2 vector, two SSE2 ones */
@@ -280,6 +279,46 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
     chain_partials(regs, in, g1, 0.0, ng);
 }
 
+/* The input registers for n points, ng groups (VL (ng - 1) < n <= VL ng): x, y, z in their
+ * value lanes, lanes past n repeating the last point; their partials the unit vectors. */
+INLINE void load_inputs(double *regs, const double *const src[3], size_t n, size_t ng)
+{
+    const size_t last = n - 1;
+    #pragma GCC unroll 3
+    for (uint32_t v = 0; v < 3; v++) {
+        double *val = comp(regs, v, 0);
+        #pragma GCC unroll 4
+        for (size_t g = 0; g + 1 < ng; g++) /* the whole groups */
+            v4_st(val + g * VL, v4_ld(src[v] + g * VL));
+        #pragma GCC unroll 4
+        for (size_t j = (ng - 1) * VL; j < ng * VL; j++) /* the last, padded */
+            val[j] = src[v][j < last ? j : last];
+        #pragma GCC unroll 4
+        for (int k = 1; k < 4; k++)
+            #pragma GCC unroll 4
+            for (size_t g = 0; g < ng; g++)
+                k_fill(comp(regs, v, k) + g * VL, (uint32_t)(k - 1) == v ? 1.0 : 0.0);
+    }
+}
+
+/* f and the gradient of the first n lanes of register res. */
+INLINE void store_results(const double *regs, uint32_t res, double *f, double (*g)[3],
+                          size_t n, size_t ng)
+{
+    const double *rv = comp((double *)regs, res, 0), *rx = comp((double *)regs, res, 1),
+                 *ry = comp((double *)regs, res, 2), *rz = comp((double *)regs, res, 3);
+    #pragma GCC unroll 4
+    for (size_t k = 0; k + 1 < ng; k++)
+        v4_st(f + k * VL, v4_ld(rv + k * VL));
+    for (size_t j = (ng - 1) * VL; j < n; j++)
+        f[j] = rv[j];
+    for (size_t j = 0; j < n; j++) {
+        g[j][0] = rx[j];
+        g[j][1] = ry[j];
+        g[j][2] = rz[j];
+    }
+}
+
 /* The tape's steps over ng groups (inlined into each caller, so that a constant ng unrolls
  * grad_step's loops over the groups). */
 INLINE void run_tape_n(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
@@ -288,7 +327,26 @@ INLINE void run_tape_n(const ism_tape *t, double *regs, ism_trig_cache *trig, si
         grad_step(&t->code[i], regs, trig, ng);
 }
 
+/* One chunk of n points in ng groups: inputs, the tape's steps, results (inlined into each
+ * caller, so that a constant ng unrolls grad_step's loops over the groups and the inputs' and
+ * results' copies). */
+INLINE void chunk_n(const ism_tape *t, double *regs, ism_trig_cache *trig,
+                    const double *const src[3], double *f, double (*g)[3], size_t n, size_t ng)
+{
+    load_inputs(regs, src, n, ng);
+    run_tape_n(t, regs, trig, ng);
+    store_results(regs, t->result, f, g, n, ng);
+}
+
 #if ISM_HAVE_AVX2_CLONE
+/* More than 4 groups: the steps in a function of their own (inlined beside the copies, the
+ * generic loop cost Klein's tape 13% more at 32 points). */
+ISM_AVX2_CLONE __attribute__((noinline))
+static void run_tape_wide_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
+{
+    run_tape_n(t, regs, trig, ng);
+}
+
 /* ng a constant in each case (the polygoniser's batches: a node's or a leaf's few points),
  * so that grad_step's loops over the groups unroll: the per-step loop control and address
  * arithmetic were most of a short batch's cost. Klein bottle's tape, callgrind, instructions
@@ -296,54 +354,45 @@ INLINE void run_tape_n(const ism_tape *t, double *regs, ism_trig_cache *trig, si
  * grad_step's loops over a register's four components unrolled too (its `#pragma GCC unroll
  * 4`s) 1,546 / 391 / 333 / 251; with its loops over the groups unrolled up to 4 (GCC left 3
  * and 4 groups rolled) at 10 / 12 / 16 / 32 points 367 / 313 / 272 / 230 -> 244 / 205 / 177 /
- * 209 (6 and 8: 345 / 260). */
+ * 209 (6 and 8: 345 / 260). The inputs' and results' copies in here too, unrolled with ng
+ * (they were memcpy / rep movs and loops over a variable ng in the caller, ~450
+ * instructions a call). */
 ISM_AVX2_CLONE
-static void run_tape_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
+static void chunk_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig,
+                       const double *const src[3], double *f, double (*g)[3], size_t n)
 {
-    switch (ng) {
-    case 1: run_tape_n(t, regs, trig, 1); break;
-    case 2: run_tape_n(t, regs, trig, 2); break;
-    case 3: run_tape_n(t, regs, trig, 3); break;
-    case 4: run_tape_n(t, regs, trig, 4); break;
-    default: run_tape_n(t, regs, trig, ng); break;
+    switch ((n + VL - 1) / VL) {
+    case 1: chunk_n(t, regs, trig, src, f, g, n, 1); break;
+    case 2: chunk_n(t, regs, trig, src, f, g, n, 2); break;
+    case 3: chunk_n(t, regs, trig, src, f, g, n, 3); break;
+    case 4: chunk_n(t, regs, trig, src, f, g, n, 4); break;
+    default: {
+        size_t ng = (n + VL - 1) / VL;
+        load_inputs(regs, src, n, ng);
+        run_tape_wide_avx2(t, regs, trig, ng);
+        store_results(regs, t->result, f, g, n, ng);
+        break;
+    }
     }
 }
 #endif
 
-static void run_tape_base(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
+static void chunk_base(const ism_tape *t, double *regs, ism_trig_cache *trig,
+                       const double *const src[3], double *f, double (*g)[3], size_t n)
 {
-    run_tape_n(t, regs, trig, ng);
+    chunk_n(t, regs, trig, src, f, g, n, (n + VL - 1) / VL);
 }
 
 static void grad_chunk(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
                        const double *z, double *f, double (*g)[3], size_t n)
 {
-    double *regs = ws->gbatch;
-    size_t ng = (n + VL - 1) / VL;
-    const double *src[3] = {x, y, z};
-    for (uint32_t v = 0; v < 3; v++) {
-        double *val = comp(regs, v, 0);
-        memcpy(val, src[v], n * sizeof *val);
-        for (size_t j = n; j < ng * VL; j++) /* lanes past n repeat the last point */
-            val[j] = src[v][n - 1];
-        for (int k = 1; k < 4; k++)
-            for (size_t g = 0; g < ng; g++)
-                k_fill(comp(regs, v, k) + g * VL, (uint32_t)(k - 1) == v ? 1.0 : 0.0);
-    }
+    const double *const src[3] = {x, y, z};
 #if ISM_HAVE_AVX2_CLONE
     if (ISM_RUN_AVX2())
-        run_tape_avx2(t, regs, ws->trig, ng);
+        chunk_avx2(t, ws->gbatch, ws->trig, src, f, g, n);
     else
 #endif
-        run_tape_base(t, regs, ws->trig, ng);
-    const double *rv = comp(regs, t->result, 0), *rx = comp(regs, t->result, 1),
-                 *ry = comp(regs, t->result, 2), *rz = comp(regs, t->result, 3);
-    memcpy(f, rv, n * sizeof *f);
-    for (size_t j = 0; j < n; j++) {
-        g[j][0] = rx[j];
-        g[j][1] = ry[j];
-        g[j][2] = rz[j];
-    }
+        chunk_base(t, ws->gbatch, ws->trig, src, f, g, n);
 }
 
 void ism_eval_gradient_batch(const ism_tape *t, ism_eval_ws *ws, const double *x,
