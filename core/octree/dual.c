@@ -400,8 +400,8 @@ static void feet_task(void *ctx, size_t k, int thread)
 }
 
 /* Children whose classify_tail takes f and ∇f's natural enclosure, at least this many,
- * take them in one batch (ism_eval_interval_grad_batch): the batch runs groups of 4 boxes,
- * a group ~2,100 instructions on the torus against ~1,700 for one box alone. */
+ * take them in one batch (ism_eval_interval_grad_batch): fewer cost more than one by one
+ * (interval_jet.h, ISM_IVGRAD_BATCH's figures). */
 #define BATCH_ENCLOSURES 2
 
 /* leaf_kind of the children kids[0..8) of a split node (views: their corners) into kind:

@@ -665,8 +665,8 @@ static bool tail_tightens(const dnode *n, const corner_view *v)
     return !ism_graph_from_enclosure(&v->g);
 }
 
-/* Models made at once for fewer nodes cost more than one by one (ism_dual_taylor_many: a
- * group of 4 centres ~2,100 instructions, one centre alone ~1,600). */
+/* Models made at once for fewer nodes cost more than one by one (ism_dual_taylor_many's
+ * centre batch: interval_jet.h, ISM_IVGRAD_BATCH's figures). */
 #define PRE_MODELS_MIN 2
 
 void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const int *at,

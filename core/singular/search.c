@@ -818,8 +818,8 @@ static void finish(search *s, worker *w, task_out *out, scell *c, const ism_inte
  * and then the centre's is not used) in one ism_eval_interval_grad_batch, bit for bit the
  * one-by-one passes (classify's kept pass; centre_at's), into pre[m]; the jets smooth_tests
  * then takes over the boxes take the batch's records as they took the kept pass's. On the
- * torus 2 such children a parent on average: a batch of 4 lanes ~2,100 instructions
- * against ~1,700 a box and ~1,600 a centre one by one. Not for tapes with min, max or abs
+ * torus 2 such children a parent on average, 4 lanes: cheaper than one by one from 2 lanes
+ * up (interval_jet.h, ISM_IVGRAD_BATCH's figures). Not for tapes with min, max or abs
  * (the batch does not take them; classify lists their kinks). */
 static void pre_gradients(const search *s, worker *w, const int v[8], const ism_interval *bx,
                           const ism_interval *by, const ism_interval *bz,
