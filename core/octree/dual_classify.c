@@ -209,6 +209,18 @@ static bool mean_value_free(const dnode *n, const ism_ivgrad *g, const double lo
     return ism_dual_mean_value_sign(n->f, g, lo, hi) != 0;
 }
 
+/* Does v->g, an enclosure of f and ∇f over node n (the natural one, or the Taylor model's),
+ * leave the node open? Of one sign (v->neg 0 or 8): neither it nor the mean-value form from
+ * the corners keeps f from 0; mixed: it shows no graph. classify_tail's tests before its
+ * first tighten, in one place: ism_dual_pre_models picks the nodes that fail them
+ * (tail_tightens), and the tail then skips them under v->pre_model. */
+static bool natural_open(const dnode *n, const corner_view *v)
+{
+    if (v->neg != 0 && v->neg != 8)
+        return !ism_graph_from_enclosure(&v->g);
+    return !ism_dual_encl_free(&v->g) && !mean_value_free(n, &v->g, v->p[0], v->p[7]);
+}
+
 /* What node i is: empty (proven free of f = 0), a surface leaf, or to be split. */
 
 /* Any two corner gradients within acos(flat_normal): the paper's one-sheet test, which the
@@ -265,13 +277,12 @@ static bool prove_on_halves(dual *d, worker *w, const dnode *n, corner_view *v,
 }
 
 /* f free of 0 over node n, whose corners share a sign (v->g: its natural enclosure): by the
- * enclosure or the mean-value form from the corners, then both on the Taylor form, then on
- * the sub-boxes. */
+ * enclosure or the mean-value form from the corners (natural_open; skipped under pre_model,
+ * ism_dual_pre_models having seen them fail), then the Taylor model's second-order form
+ * alone, then the model's enclosure and the mean-value form on it, then the sub-boxes. */
 static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
 {
-    bool known_open = v->pre_model; /* seen to fail by ism_dual_pre_models */
-    if (!known_open &&
-        (ism_dual_encl_free(&v->g) || mean_value_free(n, &v->g, v->p[0], v->p[7])))
+    if (!v->pre_model && !natural_open(n, v))
         return true;
     if (!take_model(w, v))
         return false;
@@ -286,7 +297,7 @@ static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
     if (!ism_dual_over_v2(&v->model, v->p[0], v->p[7], v2, &g))
         return false;
     v->g = g;
-    if (ism_dual_encl_free(&v->g) || mean_value_free(n, &v->g, v->p[0], v->p[7]))
+    if (!natural_open(n, v))
         return true;
     /* v->g is the model's enclosure of the whole box, just seen to hold 0 */
     return prove_on_halves(d, w, n, v, NULL, true);
@@ -651,18 +662,12 @@ int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v)
     return UNDECIDED;
 }
 
-/* Will classify_tail tighten node n, its natural enclosure in v->g (pre_g)? Its own tests
- * before its first tighten: a node whose corners agree takes none; one of one sign, when
- * neither that enclosure nor the mean-value form keeps f from 0 (empty_proven); a mixed one,
- * when the enclosure shows no graph. */
+/* Will classify_tail tighten node n, its natural enclosure in v->g (pre_g)? A node whose
+ * corners agree takes no tighten; the others do when natural_open, the tail's own tests
+ * before its first tighten, leave them open. */
 static bool tail_tightens(const dnode *n, const corner_view *v)
 {
-    bool mixed = v->neg != 0 && v->neg != 8;
-    if (v->agree)
-        return false;
-    if (!mixed)
-        return !ism_dual_encl_free(&v->g) && !mean_value_free(n, &v->g, v->p[0], v->p[7]);
-    return !ism_graph_from_enclosure(&v->g);
+    return !v->agree && natural_open(n, v);
 }
 
 /* Models made at once for fewer nodes cost more than one by one (ism_dual_taylor_many's
@@ -721,7 +726,7 @@ int ism_dual_classify_tail(dual *d, worker *w, dnode *n, corner_view *v)
                        ? DN_EMPTY
                        : DN_INNER;
         /* pre_model: the enclosure was seen to show no graph (ism_dual_pre_models) */
-        if (!(!v->pre_model && ism_graph_from_enclosure(&v->g)) &&
+        if ((v->pre_model || natural_open(n, v)) &&
             !(tighten(w, v) &&
               (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(d, w, n, v))))
             return DN_INNER;
