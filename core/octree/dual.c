@@ -407,8 +407,11 @@ static void feet_task(void *ctx, size_t k, int thread)
 /* leaf_kind of the children kids[0..8) of a split node (views: their corners) into kind:
  * every child's classify_head first, then the natural enclosures the undecided ones' tails
  * take in one batch (bit for bit the box-by-box pass's, its records kept for the Taylor
- * models' jets over the same boxes: classify_tail takes them from v->g), then the tails and
- * box_kind. Child by child near singular points (leaf_kind's balls come first). */
+ * models' jets over the same boxes: classify_tail takes them from v->g), then the Taylor
+ * models of those whose tails will tighten made at once (ism_dual_pre_models; when it runs,
+ * its centre batch, ism_eval_interval_grad_batch, resets the records of the siblings it did
+ * not pick: their tails' jets, if any, run whole), then the tails and box_kind. Child by
+ * child near singular points (leaf_kind's balls come first). */
 static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, int kind[8],
                       bool *bad)
 {
