@@ -74,13 +74,19 @@ static inline bool keyed_reserve(keyed *k, size_t more)
     return true;
 }
 
-/* Sets key's value; out of memory, nothing is kept (a memo then recomputes, no more). */
+/* Sets key's value; out of memory, nothing is kept (a memo then recomputes, no more). Only
+ * a new key can grow the table (and move slots): a key already there is set in its slot.
+ * One probe unless the table grows. */
 static inline void keyed_put(keyed *k, uint64_t key, double val)
 {
-    if (!keyed_reserve(k, 1) && !keyed_get(k, key)) /* room first: one probe, not two */
-        return;
-    size_t i = keyed_slot(k, key);
-    k->n += !k->key[i];
+    size_t i = k->cap ? keyed_slot(k, key) : 0;
+    bool found = k->cap && k->key[i];
+    if (!found && 2 * (k->n + 1) > k->cap) { /* keyed_reserve's load limit */
+        if (!keyed_reserve(k, 1))
+            return;
+        i = keyed_slot(k, key);
+    }
+    k->n += !found;
     k->key[i] = key;
     k->val[i] = val;
 }
