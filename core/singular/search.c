@@ -231,6 +231,15 @@ static bool f_off_singular_taylor(ism_interval fc, ism_interval q)
     return r.lo > 0.0 || r.hi < 0.0; /* a NaN bound (∞ − ∞) proves nothing */
 }
 
+/* classify's first test of a cell screen left OPEN (fc: f at its centre, or NULL when not
+ * evaluated; q: its parent's children_quad): dropped by f_off_singular_taylor, before any
+ * evaluation. In one place for classify and pre_gradients, which batches the gradients of
+ * exactly the children this leaves. */
+static bool centre_drops(const ism_interval *fc, ism_interval q)
+{
+    return fc && f_off_singular_taylor(*fc, q);
+}
+
 /* Whether some row of the mean-value form ∇f(c) + H(X)(X − c) excludes 0 (at: ∇f at c, j: the
  * jet over a cell holding X, dx = X − c). */
 static bool some_row_excludes(const ism_ivgrad *at, const ism_ivjet *j, const ism_interval dx[3])
@@ -559,7 +568,7 @@ static int screen(worker *w, const scell *c, const ism_interval x[3], ism_interv
 static int classify(const search *s, worker *w, const ism_interval x[3], const ism_interval *fc,
                     ism_interval q, ism_dual_model *m, const pre_grad *pre)
 {
-    if (fc && f_off_singular_taylor(*fc, q)) {
+    if (centre_drops(fc, q)) {
         w->centre_dropped++;
         return EXCLUDED;
     }
@@ -834,7 +843,7 @@ static void pre_gradients(const search *s, worker *w, const int v[8], const ism_
     if (s->branches)
         return;
     for (int m = 0; m < 8 && n < ISM_IVGRAD_BATCH / 2; m++)
-        if (v[m] == OPEN && !(fc[m] && f_off_singular_taylor(*fc[m], q)))
+        if (v[m] == OPEN && !centre_drops(fc[m], q))
             kid[n++] = m;
     for (size_t k = 0; k < n; k++) {
         int m = kid[k];
