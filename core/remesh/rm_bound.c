@@ -34,12 +34,11 @@
 static inline void first_step_from(rm_pass *p, const double x[3], double fv, rm_memo_entry *e)
 {
     const double *g = e->g;
-    double g2 = ism_dot3(g, g), gn = sqrt(g2);
-    if (!isfinite(fv) || !(gn > p->gthresh)) {
+    double g2 = ism_dot3(g, g);
+    if (!rm_bound_first_step(p, fv, sqrt(g2), &e->s1)) {
         e->state = RM_MEMO_FAIL1;
         return;
     }
-    e->s1 = fv / gn;
     double s = fv / g2;
     for (int k = 0; k < 3; k++)
         e->y[k] = x[k] - s * g[k];

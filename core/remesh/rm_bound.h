@@ -36,6 +36,18 @@
  * does or more strictly (sp_place.c's `< before` may refuse a move the measure would take). */
 double rm_bound_distance(rm_pass *p, const double x[3], double limit);
 
+/* The first Newton step's signed length from a point where f is fv and |∇f| is gn: f/|∇f|
+ * into *s1, or false and INFINITY where |∇f| is at most gthresh or f is not finite.
+ * rm_bound_signed's measure (rm_bound.c first_step_from) and the offsets rm_normals keeps
+ * for the records (rm_brec.h) are both this one, so a kept offset is what rm_bound_signed
+ * would measure, bit for bit. */
+static inline bool rm_bound_first_step(const rm_pass *p, double fv, double gn, double *s1)
+{
+    bool ok = isfinite(fv) && gn > p->gthresh;
+    *s1 = ok ? fv / gn : INFINITY;
+    return ok;
+}
+
 /* Without a bound, the distance to f = 0 from a point where f is fv and ∇f is g: |f|/|∇f|,
  * with |∇f| into *gn; INFINITY where |∇f| is at most gthresh or f is not finite. Every
  * unbounded measure (rm_distance, rm_cbound_distance, rm_bound_distances) is this one, so

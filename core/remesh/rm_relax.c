@@ -91,8 +91,8 @@ bool rm_normals(rm_pass *p)
     for (size_t v = 0; v < nv; v++) {
         double *g = p->normal + 3 * v, len = sqrt(ism_dot3(g, g));
         double s = isfinite(len) && len > p->gthresh ? 1 / len : 0;
-        if (fs) /* rm_bound_signed's first step (rm_bound.c first_step_from), bit for bit */
-            fs[v] = !isfinite(fs[v]) || !(len > p->gthresh) ? INFINITY : fs[v] / len;
+        if (fs)
+            rm_bound_first_step(p, fs[v], len, &fs[v]);
         for (int k = 0; k < 3; k++)
             g[k] *= s;
     }
