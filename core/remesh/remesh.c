@@ -244,6 +244,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
     if (ok && (!keep_found(&k, m) ||
                (records && !(p.bounded ? rm_brec_open(&p) : rm_cbound_open(&p)))))
         ok = false;
+    rm_found_offset_drop(&p); /* taken by rm_brec_open, or of no use */
     /* under a bound a move's vertex is measured by keep_offset, its fan's check and the
        offset kept (rm_relax.c), a flip's centroids again by the moves beside it: the
        simplification's point-keyed memo answers the repeats (NULL: measured afresh) */

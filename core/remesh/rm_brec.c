@@ -101,14 +101,17 @@ bool rm_brec_open(rm_pass *p)
         p->offset[i] = NAN;
     /* every vertex's first offset, from rm_normals' batch: no evaluation (one point at a
        time as the moves asked it, through rm_bound_signed: callgrind --quality good
-       --threads 1, chmutov-quartic own box, ism_quality_pass 295.45M -> 292.63M) */
-    for (size_t v = 0; p->found_offset && v < p->r.m->nverts; v++) {
+       --threads 1, chmutov-quartic own box, ism_quality_pass 295.45M -> 292.63M). Each is
+       paired with its vertex's place now: right only while no vertex has moved since
+       rm_normals (remesh.c opens the records before any step); the count bounds the loop
+       whatever was added. */
+    size_t found = p->found_offset_n < p->r.m->nverts ? p->found_offset_n : p->r.m->nverts;
+    for (size_t v = 0; p->found_offset && v < found; v++) {
         double *o = p->offset + 4 * v;
         memcpy(o, p->r.m->pos + 3 * v, 3 * sizeof *o);
         o[3] = p->found_offset[v];
     }
-    free(p->found_offset);
-    p->found_offset = NULL;
+    rm_found_offset_drop(p);
     for (size_t i = 0; i < RM_BREC_BEND_REC * nv; i++) /* no box: NaN holds nothing */
         p->bend[i] = NAN;
     return true;

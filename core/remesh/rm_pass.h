@@ -155,7 +155,9 @@ typedef struct rm_pass {
     double *offset;         /* 4 per vertex, with brec: a place and rm_bound_signed there */
     double *found_offset;   /* per vertex of the mesh found, or NULL: rm_bound_signed at
                                its place then, from rm_normals' evaluation (rm_brec_open
-                               takes them into offset and frees this) */
+                               takes them into offset and frees this; a pass without the
+                               bounded records frees it at once, rm_found_offset_drop) */
+    size_t found_offset_n;  /* vertices found_offset holds: the mesh's count then */
     size_t brec_known, brec_skipped; /* points whose slot held them, and of those the ones
                                         the plain bound spares (rm_brec_pays) */
     double *bend;           /* RM_BREC_BEND_REC per vertex, with brec: a box about its fan and
@@ -194,6 +196,13 @@ bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
 
 /* Unit normals and the vanishing threshold from ∇f at every vertex. False when out of memory. */
 bool rm_normals(rm_pass *p);
+/* The offsets rm_normals kept, freed: for a pass that opens no bounded records. */
+static inline void rm_found_offset_drop(rm_pass *p)
+{
+    free(p->found_offset);
+    p->found_offset = NULL;
+    p->found_offset_n = 0;
+}
 
 /* Marks protected vertices (r.locked) and collects the given locked edges. False when out of
  * memory. */

@@ -67,6 +67,7 @@ bool rm_normals(rm_pass *p)
     /* f at every vertex, kept for its first offset (NULL when out of memory: each measured
        when asked, rm_brec_offset) */
     double *fs = p->found_offset = malloc((nv ? nv : 1) * sizeof *p->found_offset);
+    p->found_offset_n = fs ? nv : 0;
     /* ∇f at every vertex, a chunk of the batched evaluator at a time (bit for bit
        ism_eval_gradient's, a NaN's sign aside (eval.h): a NaN gradient's vertex is no
        normal's either way; at under half the instructions a point on chmutov-quartic) */

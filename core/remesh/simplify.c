@@ -82,6 +82,7 @@ bool ism_remesh_simplify(ism_mesh *m, const ism_remesh_options *o, ism_simplify_
     sp_history h = {0};
     size_t nv = m->nverts, nt = m->ntris;
     bool ok = rm_pass_open(&p, m, o, 0) && sp_history_open(&h, &p);
+    rm_found_offset_drop(&p); /* no records here (rm_brec.h) */
     p.bounded = true;
     if (ok) {
         p.memo = rm_memo_new(); /* NULL: every measure is taken afresh */

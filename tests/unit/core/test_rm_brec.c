@@ -219,3 +219,46 @@ Test(remesh_brec, the_first_offsets_kept_at_open_are_the_ones_measured)
     ism_eval_ws_free(ws);
     ism_tape_free(t);
 }
+
+/* The offsets kept at open pair each vertex counted when rm_normals measured them with its
+ * place; a vertex added after (revD 3: the records opened past rm_pass_open's steps) has
+ * none kept, and its offset is measured when asked: rm_bound_signed's afresh, bit for bit,
+ * beside the found vertices' kept ones. (Before, the kept values were read up to the mesh's
+ * count then: one past their end for the added vertex.) In the three placements. */
+Test(remesh_brec, a_vertex_added_after_the_offsets_were_taken_is_measured)
+{
+    static const double box0[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    cr_assert(t);
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        double box[6], e = 3e-3;
+        ism_mesh m;
+        ism_poly_stats st;
+        pf_sweep_box(box0, 5, which, box);
+        pf_run(t, box, 3, 5, 1, &m, &st);
+        size_t found = m.nverts;
+        ism_remesh_options o = {.f = t, .max_error = e};
+        rm_pass p;
+        cr_assert(rm_pass_open(&p, &m, &o, 2));
+        cr_assert_eq(p.found_offset_n, found);
+        /* a point 0.4 E outside the torus's tube (R 1, r 0.3 in pf_ring_torus: on the
+           outer equator), not a vertex of the mesh found */
+        float n0[3] = {1, 0, 0};
+        uint32_t added = ism_mesh_add_vertex(&m, (double[3]){1.3 + 0.4 * e, 0, 0}, n0);
+        cr_assert_eq(added, found);
+        p.bounded = true;
+        cr_assert(rm_brec_open(&p));
+        cr_assert_null(p.found_offset);
+        for (uint32_t v = 0; v < m.nverts; v++) {
+            const double *x = m.pos + 3 * (size_t)v;
+            double kept = rm_brec_offset(&p, v), fresh = rm_bound_signed(&p, x);
+            cr_assert(memcmp(&kept, &fresh, sizeof kept) == 0,
+                      "vertex %u: kept %.17g, measured %.17g", v, kept, fresh);
+        }
+        double d = pf_ring_torus_dist(m.pos + 3 * (size_t)added);
+        cr_assert(fabs(rm_brec_offset(&p, added) - d) <= 8 * d * d + 1e-15);
+        rm_pass_close(&p, m.nverts, m.ntris, NULL);
+        ism_mesh_free(&m);
+    }
+    ism_tape_free(t);
+}
