@@ -209,28 +209,30 @@ static bool neighbours(const rm_pass *p, uint32_t v, uint32_t *nb, int *n)
     return true;
 }
 
-bool rm_junction_vertex(const rm_pass *p, uint32_t v)
+/* Whether the sheets round v meet at v, with how far off (*off, of v's mean edge): the
+ * neighbours, the third-sheet screen when asked, the sheets' meeting point. */
+static bool junction_off(const rm_pass *p, uint32_t v, bool screened, double *off)
 {
     uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
     int n;
+    return neighbours(p, v, nb, &n) && (!screened || third_sheet_possible(p, v, nb, n)) &&
+           sheets_meet_at(p, v, nb, n, off);
+}
+
+bool rm_junction_vertex(const rm_pass *p, uint32_t v)
+{
     double off;
-    return neighbours(p, v, nb, &n) && third_sheet_possible(p, v, nb, n) &&
-           sheets_meet_at(p, v, nb, n, &off);
+    return junction_off(p, v, true, &off);
 }
 
 bool rm_junction_vertex_on(const rm_pass *p, uint32_t v)
 {
-    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
-    int n;
     double off;
-    return neighbours(p, v, nb, &n) && third_sheet_possible(p, v, nb, n) &&
-           sheets_meet_at(p, v, nb, n, &off) && off <= ISM_RM_JUNCTION_AT;
+    return junction_off(p, v, true, &off) && off <= ISM_RM_JUNCTION_AT;
 }
 
 bool rm_junction_vertex_unscreened(const rm_pass *p, uint32_t v)
 {
-    uint32_t nb[2 * ISM_RM_MERGE_MAX_DEGREE];
-    int n;
     double off;
-    return neighbours(p, v, nb, &n) && sheets_meet_at(p, v, nb, n, &off);
+    return junction_off(p, v, false, &off);
 }
