@@ -121,7 +121,8 @@ void rm_brec_moved(rm_pass *p, uint32_t v, const double x[3]);
 static inline void rm_brec_drop(rm_pass *p) { p->cen_keep_v = UINT32_MAX; }
 
 /* The signed distance rm_bound_signed measures at v's place: as kept for that place
- * (rm_brec_open: every vertex's place as the pass found it; rm_brec_offset_set), bit for
+ * (rm_brec_open, on the bounded records' path: every vertex's place as the pass found it;
+ * rm_brec_offset_set), bit for
  * bit what it would measure (f is pure), or measured. A relaxation move keeps a vertex's
  * offset off f = 0 (rm_relax.c): each of the gyroid-ball's 73,631 moves tried asked it
  * where the vertex stood (97M instructions), though only its own moves change it. */

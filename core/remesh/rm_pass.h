@@ -128,8 +128,9 @@ typedef struct rm_pass {
                                (rm_collapse.c; the last mending only: remesh.c) */
     double relax_min_step;  /* a relaxation step shorter than this × the fan's mean edge is
                                not tried (rm_relax_vertex; 0: every one) */
-    double relax_far_step;  /* the same for a vertex more than a ring away from every
-                               locked vertex and needle (rm_relax_vertex; at least
+    double relax_far_step;  /* the same for a vertex no corner of whose fan is locked,
+                               with no needle among the triangles at those corners (two
+                               rings of triangles; rm_relax_vertex; at least
                                relax_min_step) */
     double *sine;           /* per triangle, or NULL: the sine of its smallest angle as
                                rm_mark_active last measured it (NAN: its shape changed

@@ -370,8 +370,9 @@ static bool idle(rm_pass *p, uint32_t v)
 }
 
 /* No vertex of v's fan is locked and no triangle with a corner there is under
- * ISM_RM_INSERT_DEG: v lies more than a ring away from every protected vertex (point,
- * crease, boundary) and needle, where remesh.c's ISM_RM_FAR_STEP is v's least step. */
+ * ISM_RM_INSERT_DEG (two rings of triangles round v): v lies more than a ring away from
+ * every protected vertex (point, crease, boundary) and no needle lies among those triangles,
+ * where remesh.c's ISM_RM_FAR_STEP is v's least step. */
 static bool far_from_features(rm_pass *p, uint32_t v)
 {
     const rm_mesh *r = &p->r;

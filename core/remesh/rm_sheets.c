@@ -75,7 +75,9 @@ static bool planes_meet(const double *const g[3], const double d[3], double det_
  * ISM_RM_JUNCTION_NEWTON_STEPS; kept when a step falls under ISM_RM_JUNCTION_NEWTON_TOL × reach
  * within reach of where it started (reach: how far from x the planes were read, so farther
  * is another junction); x unchanged otherwise (a piece's gradient vanishing, the three
- * turning parallel, no convergence). */
+ * turning parallel, no convergence). A reach of 0 — every sheet's first vertex at the
+ * planes' point — admits only a step of exactly 0: x then stays that point, which lies on
+ * every sheet's vertex already. */
 static void onto_pieces(const rm_pass *p, const ism_piece pc[3], double reach, double x[3])
 {
     double y[3] = {x[0], x[1], x[2]};
