@@ -30,10 +30,17 @@ IRR = IRR_CELLS[0]  # one fraction of a cell, for tests that move every axis ali
 PLACEMENTS = (("own", (0, 0, 0), False), ("1e-3", OFF_1E3, False), ("irr", IRR_CELLS, True))
 
 
+def labelled_placements(box, cell):
+    """(label, box) pairs: `box` and its shifted copies as placements() gives them, each with
+    its PLACEMENTS label; cell as there."""
+    c = cell if isinstance(cell, tuple) else (cell,) * 3
+    chosen = PLACEMENTS[2:] if QUICK else PLACEMENTS
+    return [(label, [box[k] + (s[k % 3] * c[k % 3] if in_cells else s[k % 3])
+                     for k in range(6)])
+            for label, s, in_cells in chosen]
+
+
 def placements(box, cell):
     """[lo x, lo y, lo z, hi x, hi y, hi z] boxes: `box` and its shifted copies; cell: the
     finest cell's side, or a tuple of the three sides (a box that is not a cube)."""
-    c = cell if isinstance(cell, tuple) else (cell,) * 3
-    shifts = [[s[a] * c[a] if in_cells else s[a] for a in range(3)]
-              for _, s, in_cells in PLACEMENTS]
-    return [[box[k] + s[k % 3] for k in range(6)] for s in (shifts[2:] if QUICK else shifts)]
+    return [b for _, b in labelled_placements(box, cell)]

@@ -14,7 +14,7 @@ import tempfile
 import unittest
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from boxes import PLACEMENTS, placements  # noqa: E402
+from boxes import labelled_placements, placements  # noqa: E402
 from drawn import obj_chains  # noqa: E402
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -518,8 +518,9 @@ class CreaseJunctions(unittest.TestCase):
     # there (the whole crowd into the point fails its spokes: the ring 0.06-0.1 out has no
     # vertex on one crease), and a crowd vertex cannot slide out along its crease (beside the
     # junction three or more of its neighbours read as on the crease: no chain). Own and
-    # irrational boxes: no triangle under 10 degrees at either point.
-    NEEDLE_GAP = ("1e-3",)
+    # irrational boxes: no triangle under 10 degrees at either point. In the gap's box the
+    # floor it has (0.86 degrees) is asserted instead, so a worse triangle still fails.
+    NEEDLE_GAP = {"1e-3": 0.5}
 
     def test_junction_vertex_kept_where_the_crease_cells_are_coarse(self):
         """With coarse fans round the triple points the pass lost both in every box (the
@@ -532,9 +533,8 @@ class CreaseJunctions(unittest.TestCase):
         preset, depth, cells = self.COARSE
         box0 = self.PRESETS[preset][0]
         cell = tuple((box0[a + 3] - box0[a]) / 2 ** cells for a in range(3))
-        boxes = placements(box0, cell)  # (QUICK: the irrational one alone)
-        labels = [label for label, _, _ in PLACEMENTS][3 - len(boxes):]
-        for label, box in zip(labels, boxes):
+        # (QUICK: the irrational one alone)
+        for label, box in labelled_placements(box0, cell):
             with self.subTest(box=box):
                 diag = math.dist(box[:3], box[3:])
                 extra = ("--max-error", repr(1e-3 * diag), "--threads", "2")
@@ -548,8 +548,8 @@ class CreaseJunctions(unittest.TestCase):
                     self.assertLess(math.dist(verts[at], q), 1e-8 * diag, q)
                     fan = [min_angle_deg(*(verts[i] for i in t)) for t in tris if at in t]
                     self.assertGreater(len(fan), 2)
-                    if label not in self.NEEDLE_GAP:
-                        self.assertGreaterEqual(min(fan), self.NEEDLE_DEG, q)
+                    floor = self.NEEDLE_GAP.get(label, self.NEEDLE_DEG)
+                    self.assertGreaterEqual(min(fan), floor, q)
 
 
 class ZipBesideTheDoubleLines(unittest.TestCase):
