@@ -485,9 +485,14 @@ static bool merge_onto_crease(rm_pass *p, uint32_t v, uint32_t w, const crease_f
     crease_fan cw;
     rm_merge g;
     if (!walk_fan(p, w, &cw) ||
-        !on_crease(p, c->f, rm_pos(p, w), near_tol(p, f->mean_edge), NULL, NULL) ||
-        !rm_merge_find_any(r, v, w, ISM_RM_COLLAPSE_MAX_DEGREE, &g) ||
-        !rm_merge_link_ok(r, &g))
+        !on_crease(p, c->f, rm_pos(p, w), near_tol(p, f->mean_edge), NULL, NULL))
+        return false;
+    /* v into w first; a junction's vertex is asked only where that merge is there or v is
+       locked (a free vertex is on no junction), and then w goes into v whether or not v
+       could go into w (the two differ: v's degree, a fan of three) */
+    bool v_into_w = rm_merge_find_any(r, v, w, ISM_RM_COLLAPSE_MAX_DEGREE, &g) &&
+                    rm_merge_link_ok(r, &g);
+    if (!v_into_w && !r->locked[v])
         return false;
     double x[3], mid[3], grad[3];
     crease_frame cf;
@@ -500,6 +505,8 @@ static bool merge_onto_crease(rm_pass *p, uint32_t v, uint32_t w, const crease_f
             return false;
         memcpy(x, rm_pos(p, v), sizeof x);
     } else {
+        if (!v_into_w)
+            return false;
         rm_midpoint(rm_pos(p, v), rm_pos(p, w), mid);
         memcpy(x, mid, sizeof x);
         if (!to_crease(p, c->f, x, f->mean_edge, &cf, &framed) ||
