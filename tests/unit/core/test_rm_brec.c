@@ -161,6 +161,16 @@ Test(remesh_brec, a_bump_between_the_vertices_is_not_carried_over)
     }
 }
 
+/* The ring torus polygonised (depths 3-5, one thread) in placement which of its ±1.5 box. */
+static void torus_mesh(ism_tape *t, int which, ism_mesh *m)
+{
+    static const double box0[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    double box[6];
+    ism_poly_stats st;
+    pf_sweep_box(box0, 5, which, box);
+    pf_run(t, box, 3, 5, 1, m, &st);
+}
+
 /* Every vertex's first offset is kept when the records open (rm_brec_open, from rm_normals'
  * batch): the record holds the vertex's place, and its offset is what rm_bound_signed
  * measures there one point at a time (no memo: afresh), bit for bit. The vertices of a
@@ -170,16 +180,13 @@ Test(remesh_brec, a_bump_between_the_vertices_is_not_carried_over)
  * lattice and both shifted ones. */
 Test(remesh_brec, the_first_offsets_kept_at_open_are_the_ones_measured)
 {
-    static const double box0[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
     ism_tape *t = pf_compile(&pf_ring_torus);
     ism_eval_ws *ws = ism_eval_ws_new(t);
     cr_assert(t && ws);
     for (int which = pf_first_box() - 1; which < 2; which++) {
-        double box[6], e = 3e-3;
+        double e = 3e-3;
         ism_mesh m;
-        ism_poly_stats st;
-        pf_sweep_box(box0, 5, which, box);
-        pf_run(t, box, 3, 5, 1, &m, &st);
+        torus_mesh(t, which, &m);
         for (size_t v = 0; v < m.nverts; v++) { /* pushed by (v mod 10) tenths of e */
             double *x = m.pos + 3 * v, g[3];
             ism_eval_gradient(t, ws, x[0], x[1], x[2], g);
@@ -227,15 +234,12 @@ Test(remesh_brec, the_first_offsets_kept_at_open_are_the_ones_measured)
  * count then: one past their end for the added vertex.) In the three placements. */
 Test(remesh_brec, a_vertex_added_after_the_offsets_were_taken_is_measured)
 {
-    static const double box0[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
     ism_tape *t = pf_compile(&pf_ring_torus);
     cr_assert(t);
     for (int which = pf_first_box() - 1; which < 2; which++) {
-        double box[6], e = 3e-3;
+        double e = 3e-3;
         ism_mesh m;
-        ism_poly_stats st;
-        pf_sweep_box(box0, 5, which, box);
-        pf_run(t, box, 3, 5, 1, &m, &st);
+        torus_mesh(t, which, &m);
         size_t found = m.nverts;
         ism_remesh_options o = {.f = t, .max_error = e};
         rm_pass p;
