@@ -54,7 +54,7 @@ static inline void ism_trig_pair(ism_trig_cache *m, double u, double *s, double 
     uint64_t key;
     memcpy(&key, &u, sizeof key);
     ism_trig_entry *e =
-        &m->e[(key * 0x9e3779b97f4a7c15ull) >> (64 - ISM_TRIG_CACHE_BITS) & m->mask];
+        &m->e[((key * 0x9e3779b97f4a7c15ull) >> (64 - ISM_TRIG_CACHE_BITS)) & m->mask];
     if (e->key != key) {
         sincos(u, &e->s, &e->c);
         e->key = key;
