@@ -201,6 +201,9 @@ Test(eval_deriv, sines_and_cosines_through_either_memo_size)
     cr_assert(t && plain);
     ism_eval_ws *ws[2] = {ism_eval_ws_new(t), ism_eval_ws_new(plain)};
     cr_assert(ws[0] && ws[1]);
+    /* ws[1] is plain's (the small memo) but evaluates t: it must hold t's registers and
+     * instructions, or every call below gives NAN and fails as a wrong sine */
+    cr_assert(ism_ws_fits(ws[1], t), "plain's workspace does not fit t: lengthen plain");
     cr_assert_eq(ws[0]->trig->mask, (1u << ISM_TRIG_CACHE_BITS) - 1);
     cr_assert_eq(ws[1]->trig->mask, (1u << ISM_TRIG_CACHE_SMALL_BITS) - 1);
     const int n = 3 << ISM_TRIG_CACHE_BITS; /* each argument's slot taken again in between */
