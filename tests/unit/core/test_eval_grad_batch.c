@@ -75,8 +75,12 @@ static bool same_bits(double a, double b)
 
 static void check_tape(const char *name, const ism_tape *t, uint64_t seed)
 {
-    static const size_t SIZES[] = {1, 2, 5, ISM_GRAD_BATCH - 1, ISM_GRAD_BATCH,
-                                   ISM_GRAD_BATCH + 3, 3 * ISM_GRAD_BATCH + 7, MAXN};
+    /* chunks of 1-32 points in 4-lane groups: 9-16 the 3- and 4-group arms (12 and 16 with
+     * a full last group), 17-28 the wide arm with a full (20, 24, 28) or a padded (17) last
+     * group, besides 1, 2, 5, 31, 32 and the remainders 3, 7, 8 of the longer batches */
+    static const size_t SIZES[] = {1, 2, 5, 9, 12, 13, 16, 17, 20, 24, 28,
+                                   ISM_GRAD_BATCH - 1, ISM_GRAD_BATCH, ISM_GRAD_BATCH + 3,
+                                   3 * ISM_GRAD_BATCH + 7, MAXN};
     ism_eval_ws *ws = ism_eval_ws_new(t), *ws1 = ism_eval_ws_new(t);
     cr_assert(ws && ws1);
     test_rng rng = {seed};
