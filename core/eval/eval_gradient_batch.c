@@ -327,6 +327,12 @@ INLINE void run_tape_n(const ism_tape *t, double *regs, ism_trig_cache *trig, si
         grad_step(&t->code[i], regs, trig, ng);
 }
 
+/* The groups of VL lanes that n points take (the last one padded). */
+static inline size_t groups(size_t n)
+{
+    return (n + VL - 1) / VL;
+}
+
 /* One chunk of n points in ng groups: inputs, the tape's steps, results (inlined into each
  * caller, so that a constant ng unrolls grad_step's loops over the groups and the inputs' and
  * results' copies). */
@@ -348,26 +354,24 @@ static void run_tape_wide_avx2(const ism_tape *t, double *regs, ism_trig_cache *
 }
 
 /* ng a constant in each case (the polygoniser's batches: a node's or a leaf's few points),
- * so that grad_step's loops over the groups unroll: the per-step loop control and address
- * arithmetic were most of a short batch's cost. Klein bottle's tape, callgrind, instructions
- * a point at 1 / 4 / 6 / 8 points: 2,457 / 618 / 532 / 401 -> 1,676 / 423 / 343 / 259; with
- * grad_step's loops over a register's four components unrolled too (its `#pragma GCC unroll
- * 4`s) 1,546 / 391 / 333 / 251; with its loops over the groups unrolled up to 4 (GCC left 3
- * and 4 groups rolled) at 10 / 12 / 16 / 32 points 367 / 313 / 272 / 230 -> 244 / 205 / 177 /
- * 209 (6 and 8: 345 / 260). The inputs' and results' copies in here too, unrolled with ng
- * (they were memcpy / rep movs and loops over a variable ng in the caller, ~450
- * instructions a call). */
+ * so that grad_step's loops over the groups and the inputs' and results' copies unroll: the
+ * per-step loop control and address arithmetic, and the copies by memcpy / rep movs in the
+ * caller, were most of a short batch's cost. Klein bottle's tape, callgrind (notes/
+ * klein25_mb.c mode 1), instructions a point at 1 / 4 / 6 / 8 / 10 / 16 / 32 points, as of
+ * 29c1011: 1,316 / 348 / 304 / 235 / 216 / 160 / 206 (the earlier steps in that commit's and
+ * its predecessors' messages). The default arm repeats chunk_n's three steps on purpose:
+ * only its run differs (run_tape_wide_avx2, kept out of line). */
 ISM_AVX2_CLONE
 static void chunk_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig,
                        const double *const src[3], double *f, double (*g)[3], size_t n)
 {
-    switch ((n + VL - 1) / VL) {
+    size_t ng = groups(n);
+    switch (ng) {
     case 1: chunk_n(t, regs, trig, src, f, g, n, 1); break;
     case 2: chunk_n(t, regs, trig, src, f, g, n, 2); break;
     case 3: chunk_n(t, regs, trig, src, f, g, n, 3); break;
     case 4: chunk_n(t, regs, trig, src, f, g, n, 4); break;
     default: {
-        size_t ng = (n + VL - 1) / VL;
         load_inputs(regs, src, n, ng);
         run_tape_wide_avx2(t, regs, trig, ng);
         store_results(regs, t->result, f, g, n, ng);
@@ -380,7 +384,7 @@ static void chunk_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig,
 static void chunk_base(const ism_tape *t, double *regs, ism_trig_cache *trig,
                        const double *const src[3], double *f, double (*g)[3], size_t n)
 {
-    chunk_n(t, regs, trig, src, f, g, n, (n + VL - 1) / VL);
+    chunk_n(t, regs, trig, src, f, g, n, groups(n));
 }
 
 static void grad_chunk(const ism_tape *t, ism_eval_ws *ws, const double *x, const double *y,
