@@ -6,6 +6,7 @@
  * (ism_eval_points: the conformance pass's rim samples) loop over just their lanes and take
  * sines and cosines through the workspace's memo, as one point does. */
 #include "core/eval/avx2_clone.h"
+#include "core/eval/threaded.h"
 #include "core/eval/workspace.h"
 #include "core/eval/trig_pair.h"
 #include "core/expr/scalar_ops.h"
@@ -56,7 +57,7 @@ static inline __attribute__((always_inline)) double trig_value(ism_trig_cache *t
     X(ISM_OP_EXP, exp(A))                                                                   \
     X(ISM_OP_LOG, ism_log_clip(A))                                                          \
     X(ISM_OP_ABS, fabs(A))
-_Static_assert(ISM_OP_COUNT == 26, "POINT_OPS names every operation (run_threaded's table)");
+ISM_THREADED_COMPLETE(POINT_OPS, "POINT_OPS names every operation (run_threaded's table)");
 
 /* One instruction's value from its first operand's value a. The two-register operations read
  * their second operand, register in->b, as r[in->b * stride + lane] inside their own case
@@ -89,11 +90,7 @@ static inline __attribute__((always_inline)) double op_value(const ism_instr *in
  * past the list gives NAN, as op_value's default. */
 static void run_threaded(const ism_instr *code, size_t n, double *r, ism_trig_cache *trig)
 {
-#define LABEL(OP, E) [OP] = &&L_##OP,
-    static const void *const next_op[256] = {
-        POINT_OPS(LABEL) [ISM_OP_COUNT ... 255] = &&L_BAD
-    };
-#undef LABEL
+    ISM_THREADED_TABLE(next_op, POINT_OPS);
     if (!n)
         return;
     const ism_instr *in = code, *const end = code + n;
@@ -104,9 +101,7 @@ static void run_threaded(const ism_instr *code, size_t n, double *r, ism_trig_ca
 #define STEP(OP, E)                                                                         \
     L_##OP:                                                                                 \
     r[in->out] = E;                                                                         \
-    if (++in == end)                                                                        \
-        return;                                                                             \
-    goto *next_op[in->op];
+    ISM_THREADED_NEXT(next_op, in, end, return)
     POINT_OPS(STEP)
     STEP(BAD, NAN)
 #undef STEP

@@ -4,6 +4,7 @@
 #include "core/eval/avx2_clone.h"
 #include "core/eval/deriv_rules.h"
 #include "core/eval/lanes4.h"
+#include "core/eval/threaded.h"
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
 #include <string.h>
@@ -275,7 +276,7 @@ STEP(step_other)
     X(ISM_OP_EXP, step_exp)                                                                 \
     X(ISM_OP_LOG, step_other)                                                               \
     X(ISM_OP_ABS, step_abs)
-_Static_assert(ISM_OP_COUNT == 26, "DUAL_STEPS names every operation (THREADED_STEPS' table)");
+ISM_THREADED_COMPLETE(DUAL_STEPS, "DUAL_STEPS names every operation (THREADED_STEPS' table)");
 
 /* One instruction in place, chosen by a switch (the piece gradient's loop, which steps
  * instruction by instruction between its forced kinks). */
@@ -301,8 +302,8 @@ INLINE void dual_step(const ism_instr *in, ism_dual *r, ism_trig_cache *trig)
 #define THREADED_STEPS(code, n, r, trig)                                                    \
     do {                                                                                    \
         DUAL_STEPS(DUAL_LABEL)                                                              \
-        static const void *const next_step[256] = {                                         \
-            DUAL_STEPS(DUAL_ENTRY)[ISM_OP_COUNT ... 255] = &&L_BAD };                       \
+        __label__ L_BAD;                                                                    \
+        ISM_THREADED_TABLE(next_step, DUAL_STEPS);                                          \
         if (!(n))                                                                           \
             break;                                                                          \
         ism_dual *const regs = (r);                                                         \
@@ -313,13 +314,10 @@ INLINE void dual_step(const ism_instr *in, ism_dual *r, ism_trig_cache *trig)
         DUAL_BODY(BAD, step_other)                                                          \
     } while (0)
 #define DUAL_LABEL(OP, FN) __label__ L_##OP;
-#define DUAL_ENTRY(OP, FN) [OP] = &&L_##OP,
 #define DUAL_BODY(OP, FN)                                                                   \
     L_##OP:                                                                                 \
     FN(in, regs, memo, &regs[in->out], &regs[in->a]);                                       \
-    if (++in == end)                                                                        \
-        break;                                                                              \
-    goto *next_step[in->op];
+    ISM_THREADED_NEXT(next_step, in, end, break)
 
 /* ws's dual registers with x, y, z seeded (each its own unit derivative). */
 static inline __attribute__((always_inline)) ism_dual *dual_inputs(ism_eval_ws *ws, double x,

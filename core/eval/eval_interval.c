@@ -3,6 +3,7 @@
  * box proves to be the result everywhere; tape shortening reads those choices. */
 #include "core/eval/interval_eval.h"
 #include "core/eval/interval_ops.h"
+#include "core/eval/threaded.h"
 #include "core/eval/workspace.h"
 
 enum { BOTH = 0, ONLY_A = 1, ONLY_B = 2 };
@@ -65,7 +66,7 @@ static ism_interval trig_op(int op, ism_interval a, ism_trig_cache *trig)
     X(ISM_OP_EXP, iv_exp(A))                                                                \
     X(ISM_OP_LOG, iv_log(A))                                                                \
     X(ISM_OP_ABS, (CH = abs_choice(A), iv_abs(A)))
-_Static_assert(ISM_OP_COUNT == 26, "INTERVAL_OPS names every operation (the label table)");
+ISM_THREADED_COMPLETE(INTERVAL_OPS, "INTERVAL_OPS names every operation (the label table)");
 
 /* abs's choice: its operand ≥ 0 over the box (1), < 0 (2), or either (0) */
 static inline uint8_t abs_choice(ism_interval a)
@@ -87,11 +88,7 @@ static ism_interval sane_input(ism_interval v)
 ism_interval ism_interval_run(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
                               ism_interval y, ism_interval z, uint8_t *choices)
 {
-#define LABEL(OP, E) [OP] = &&L_##OP,
-    static const void *const next_op[256] = {
-        INTERVAL_OPS(LABEL) [ISM_OP_COUNT ... 255] = &&L_BAD
-    };
-#undef LABEL
+    ISM_THREADED_TABLE(next_op, INTERVAL_OPS);
     ism_interval *r = ws->iv;
     ism_trig_cache *trig = ws->trig;
     r[ISM_REG_X] = sane_input(x);
@@ -110,9 +107,7 @@ ism_interval ism_interval_run(const ism_tape *t, ism_eval_ws *ws, ism_interval x
 #define STEP(OP, E)                                                                         \
     L_##OP:                                                                                 \
     r[in->out] = ism_iv_sane(E);                                                            \
-    if (++in == end)                                                                        \
-        return r[t->result];                                                                \
-    goto *next_op[in->op];
+    ISM_THREADED_NEXT(next_op, in, end, return r[t->result])
     INTERVAL_OPS(STEP)
     STEP(BAD, ism_iv_whole())
 #undef STEP
