@@ -801,6 +801,26 @@ static bool cut_runs(ism_sampler *s, const ism_fpoint *pts, size_t n, const labe
 #define CUT_PATH_HALVINGS 3
 #define CUT_PATH_MAX ((1 << CUT_PATH_HALVINGS) - 1)
 
+/* The middle of chord a-b between two crease points moved onto the crease of labels l[0] <
+ * l[1] (Newton from it) in x: its distance from the middle, the chord's sag; -1 where Newton
+ * fails. */
+static double chord_foot(ism_sampler *s, bool pm, const double *a, const double *b,
+                         const label_t l[2], double x[3])
+{
+    double m[3];
+    for (int k = 0; k < 3; k++)
+        m[k] = x[k] = (a[k] + b[k]) / 2;
+    return newton(s, pm, x, 2, l) ? ism_dist3(x, m) : -1;
+}
+
+/* Does a chord whose middle's foot lies d from it (chord_foot) stray from the crease: d past
+ * sag = CREASE_CHORD_SAG × max_error (a failed or not finite foot does not)? The one rule
+ * both crease_path (follow the crease) and unseen_crease (split the leaf) read. */
+static bool chord_strays(double d, double sag)
+{
+    return d >= 0 && d > sag;
+}
+
 /* A point of the crease path: the crease point's position and both branches' gradients. */
 typedef struct path_pt {
     double p[3], g[2][3];
@@ -825,15 +845,14 @@ static bool crease_path(ism_sampler *s, bool pm, const double *a, const double *
                         label_t hi, double sag, const double node[6], int halvings,
                         path_pt *path, int *n)
 {
-    double m[3], x[3], v[2];
+    double x[3], v[2];
     const label_t l[2] = {lo, hi};
     if (halvings == 0)
         return true;
-    for (int k = 0; k < 3; k++)
-        m[k] = x[k] = (a[k] + b[k]) / 2;
-    if (!newton(s, pm, x, 2, l))
+    double d = chord_foot(s, pm, a, b, l, x);
+    if (d < 0)
         return false;
-    if (!(ism_dist3(x, m) > sag))
+    if (!chord_strays(d, sag))
         return true;
     if (!in_node(x, node) || *n >= CUT_PATH_MAX)
         return false;
@@ -952,10 +971,8 @@ static bool chord_far(ism_sampler *s, bool pm, const double *a, const double *c,
 {
     if (pm && (!on_crease(s, a, l, sag) || !on_crease(s, c, l, sag)))
         return false;
-    double m[3], x[3];
-    for (int k = 0; k < 3; k++)
-        m[k] = x[k] = (a[k] + c[k]) / 2;
-    return newton(s, pm, x, 2, l) && ism_dist3(x, m) > sag;
+    double x[3];
+    return chord_strays(chord_foot(s, pm, a, c, l, x), sag);
 }
 
 /* The chords one leaf's triangles asked chord_far about, while they are tested: the chord
