@@ -1,0 +1,162 @@
+/* test_crease_path.c — the crease path of a cut polygon (crease_split.c crease_path, through
+ * ism_crease_cut_loop): where the chord between a polygon's two crease points strays from
+ * the crease, points of the crease are put between them. f = max(x² + y² − 1, z): its crease
+ * is the unit circle in z = 0, and a polygon in z = 0 has its corners inside the circle on
+ * one branch (z) and outside on the other. Newton from a chord's middle moves it radially
+ * (both gradients, 2(x, y, 0) and (0, 0, 1), span the radial plane), so a chord between the
+ * circle's points at angles α and β has its foot at angle (α + β)/2, 1 − cos((β − α)/2) from
+ * the middle: the closed form the path is checked against. Every geometric case is placed
+ * as given and moved by PF_OFF_* and by PF_IRR_* (the surface moved with it). */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include "poly_fixture.h"
+#include "core/eval/eval.h"
+#include "core/octree/cell.h"
+#include "core/octree/crease_split.h"
+
+#define ON_TOL 1e-9    /* a crease point on the circle (Newton's rounding) */
+#define ANGLE_TOL 1e-9 /* a path point at its closed-form angle */
+
+/* A chord of the unit circle over an arc of angle φ sags 1 − cos(φ/2): the path over
+ * ARC = 0.6 (ends at ±0.3) under E = 0.02 (sag limit E/2 = 0.01, CREASE_CHORD_SAG) follows
+ * the chord (sag 0.0447), its halves (0.0112) and stops at the quarters (0.0028): 3 points,
+ * at angles −0.15, 0, 0.15. */
+#define ARC 0.6
+#define ERROR_BOUND 0.02
+#define PATH_POINTS 3
+
+/* f moved by off. */
+static ism_tape *circle_crease(const double off[3])
+{
+    char src[256];
+    snprintf(src, sizeof src, "max((x - %.17g)^2 + (y - %.17g)^2 - 1, z - %.17g)", off[0],
+             off[1], off[2]);
+    pf_surface s = {src, NULL, 0, NULL, 0};
+    return pf_compile(&s);
+}
+
+static void placements(double offs[3][3])
+{
+    const double o[3][3] = {{0, 0, 0},
+                            {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
+                            {PF_IRR_X * 0.1, PF_IRR_Y * 0.1, PF_IRR_Z * 0.1}};
+    memcpy(offs, o, sizeof o);
+}
+
+/* pts[i] at radius r[i], angle th[i] in z = 0, moved by off; gradient +z. */
+static void polygon(ism_fpoint *pts, size_t n, const double *r, const double *th,
+                    const double off[3])
+{
+    for (size_t i = 0; i < n; i++) {
+        ism_fpoint p = {{r[i] * cos(th[i]) + off[0], r[i] * sin(th[i]) + off[1], off[2]},
+                        {0, 0, 1},
+                        0};
+        pts[i] = p;
+    }
+}
+
+/* The polygon cut by ism_crease_cut_loop under ERROR_BOUND within node (relative to off);
+ * out filled. */
+static bool cut(ism_tape *t, ism_eval_ws *ws, const ism_fpoint *pts, size_t n,
+                const double node_rel[6], const double off[3], ism_cell_out *out)
+{
+    ism_sampler s = {.tape = t, .ws = ws, .dist_above = ERROR_BOUND};
+    double node[6];
+    for (int k = 0; k < 6; k++)
+        node[k] = node_rel[k] + off[k % 3];
+    memset(out, 0, sizeof *out);
+    bool done = false;
+    cr_assert(ism_crease_cut_loop(&s, pts, n, ism_dist3(node, node + 3), node, ERROR_BOUND,
+                                  out, &done));
+    return done;
+}
+
+/* The angles of out's crease points (ISM_FP_CREASE), each asserted on the circle and inside
+ * node_rel; returns how many. */
+static size_t crease_angles(const ism_cell_out *out, const double off[3], const double node[6],
+                            double *angle, size_t most, int placed)
+{
+    size_t n = 0;
+    for (size_t v = 0; v < out->nverts; v++) {
+        if (!(out->verts[v].flags & ISM_FP_CREASE))
+            continue;
+        double p[3];
+        for (int k = 0; k < 3; k++)
+            p[k] = out->verts[v].p[k] - off[k];
+        cr_expect_leq(fabs(hypot(p[0], p[1]) - 1), ON_TOL, "placement %d: off the circle",
+                      placed);
+        cr_expect_leq(fabs(p[2]), ON_TOL, "placement %d: off z = 0", placed);
+        for (int k = 0; k < 3; k++)
+            cr_expect(p[k] > node[k] && p[k] < node[3 + k],
+                      "placement %d: a crease point outside the node", placed);
+        bool again = false; /* each run's polygon has its own copy (its branch's gradient) */
+        for (size_t w = 0; w < v && !again; w++)
+            again = (out->verts[w].flags & ISM_FP_CREASE) &&
+                    !memcmp(out->verts[w].p, out->verts[v].p, sizeof p);
+        if (again)
+            continue;
+        if (n < most)
+            angle[n] = atan2(p[1], p[0]);
+        n++;
+    }
+    return n;
+}
+
+/* A quad across the circle over ARC: its two mixed edges meet the circle at ±ARC/2; the path
+ * points are the circle's points at −ARC/4, 0, ARC/4 (in order along the chord: their angles
+ * are the chord's parameter's order), inside the node. */
+Test(crease_path, follows_the_circle_between_the_ends)
+{
+    double offs[3][3];
+    placements(offs);
+    const double r[4] = {0.8, 1.2, 1.2, 0.8}, th[4] = {-ARC / 2, -ARC / 2, ARC / 2, ARC / 2};
+    const double node[6] = {0.5, -0.6, -0.1, 1.3, 0.6, 0.1};
+    const double want[2 + PATH_POINTS] = {-ARC / 2, -ARC / 4, 0, ARC / 4, ARC / 2};
+    for (int placed = 0; placed < 3; placed++) {
+        ism_tape *t = circle_crease(offs[placed]);
+        ism_eval_ws *ws = ism_eval_ws_new(t);
+        ism_fpoint pts[4];
+        polygon(pts, 4, r, th, offs[placed]);
+        ism_cell_out out;
+        cr_expect(cut(t, ws, pts, 4, node, offs[placed], &out), "placement %d: not cut", placed);
+        double angle[2 + PATH_POINTS + 4];
+        size_t n = crease_angles(&out, offs[placed], node, angle, 2 + PATH_POINTS + 4, placed);
+        cr_expect_eq(n, 2 + PATH_POINTS, "placement %d: %zu crease points", placed, n);
+        for (size_t i = 0; i < n && i < 2 + PATH_POINTS; i++) {
+            bool found = false;
+            for (int j = 0; j < 2 + PATH_POINTS; j++)
+                found |= fabs(angle[i] - want[j]) <= ANGLE_TOL;
+            cr_expect(found, "placement %d: a crease point at angle %.12g", placed, angle[i]);
+        }
+        ism_cell_out_free(&out);
+        ism_eval_ws_free(ws);
+        ism_tape_free(t);
+    }
+}
+
+/* A quad over the same arc, its outer corners at radius 1.03 (x ≤ 1.03 cos 0.3 = 0.984), in a
+ * node whose side x < 0.99 holds every corner and both ends (x = cos 0.3 = 0.955) but not the
+ * chord's foot (1, 0): the path is dropped and the chord stays (2 crease points). */
+Test(crease_path, no_path_where_a_foot_leaves_the_node)
+{
+    double offs[3][3];
+    placements(offs);
+    const double r[4] = {0.8, 1.03, 1.03, 0.8}, th[4] = {-ARC / 2, -ARC / 2, ARC / 2, ARC / 2};
+    const double node[6] = {0.5, -0.6, -0.1, 0.99, 0.6, 0.1};
+    for (int placed = 0; placed < 3; placed++) {
+        ism_tape *t = circle_crease(offs[placed]);
+        ism_eval_ws *ws = ism_eval_ws_new(t);
+        ism_fpoint pts[4];
+        polygon(pts, 4, r, th, offs[placed]);
+        ism_cell_out out;
+        cr_expect(cut(t, ws, pts, 4, node, offs[placed], &out), "placement %d: not cut", placed);
+        double angle[8];
+        size_t n = crease_angles(&out, offs[placed], node, angle, 8, placed);
+        cr_expect_eq(n, 2, "placement %d: %zu crease points", placed, n);
+        ism_cell_out_free(&out);
+        ism_eval_ws_free(ws);
+        ism_tape_free(t);
+    }
+}
