@@ -204,27 +204,28 @@ static bool branch_labels(ism_sampler *s, const ism_corners *k, ism_piece branch
     return seen == 3;
 }
 
-/* The corners' unit normals n (f's gradients) in at most `most` directions, PLANE_PIECE_COS
- * apart: the screen before any piece is evaluated (a curved sheet's eight corners point
- * eight ways; the gyroid ball's nodes stop here). */
-static bool few_directions(const ism_corners *k, double n[8][3], int most)
+/* The corners' unit normals n (f's gradients): how many directions, PLANE_PIECE_COS apart,
+ * they point in; 0 where a normal is no direction or there are more than `most`. The screen
+ * before any piece is evaluated (a curved sheet's eight corners point eight ways; the gyroid
+ * ball's nodes stop here). */
+static int few_directions(const ism_corners *k, double n[8][3], int most)
 {
     int dir[8], ndir = 0;
     for (int c = 0; c < 8; c++) {
         memcpy(n[c], k->g[c], sizeof n[c]);
         double len = ism_normalise3(n[c]);
         if (!(len > 0) || !isfinite(len))
-            return false;
+            return 0;
         int d = 0;
         while (d < ndir && !(ism_dot3(n[c], n[dir[d]]) >= PLANE_PIECE_COS))
             d++;
         if (d == ndir) {
             if (ndir == most)
-                return false;
+                return 0;
             dir[ndir++] = c;
         }
     }
-    return true;
+    return ndir;
 }
 
 /* Each piece's corner normals n one direction (PLANE_PIECE_COS): planes over the node. */
@@ -244,13 +245,17 @@ static bool plane_pieces(const double n[8][3], const ism_piece branch[8])
 /* In pieces mode, the corners' labels by their smooth piece (ism_eval_piece, the labels
  * ism_crease_split cuts by), for a node within CREASE_PIECES_ERRORS (two pieces) or
  * CREASE_JUNCTION_ERRORS (more) whose pieces are planes: how many pieces the corners show
- * (2, or 3 for three or more); 0 where the node is not judged so. */
+ * (2, or 3 for three or more), with the corners' unit normals n (f's gradients, each its own
+ * piece's); 0 where the node is not judged so. Corners whose normals all point one way are
+ * not asked their pieces: two planes with one normal meet in no crease over the node (flat
+ * nodes of a cube's face stop here). */
 static int piece_labels(ism_sampler *s, const ism_flatness *fl, const double lo[3],
-                        const double hi[3], const ism_corners *k, ism_piece branch[8])
+                        const double hi[3], const ism_corners *k, ism_piece branch[8],
+                        double n[8][3])
 {
-    double size = min_side(lo, hi), n[8][3];
+    double size = min_side(lo, hi);
     if (!(size <= CREASE_PIECES_ERRORS * fl->max_error) ||
-        !few_directions(k, n, PLANE_PIECES_MOST))
+        few_directions(k, n, PLANE_PIECES_MOST) < 2)
         return 0;
     ism_piece other = ISM_PIECE_NONE;
     int np = 1;
@@ -282,12 +287,12 @@ static int crease_cell(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl
 {
     static const double any[2] = {0, 0};
     ism_piece branch[8];
-    bool pieces = s->crease_pieces && piece_labels(s, fl, lo, hi, k, branch) > 0;
+    double n[8][3]; /* the corners' unit normals: in pieces mode piece_labels' */
+    bool pieces = s->crease_pieces && piece_labels(s, fl, lo, hi, k, branch, n) > 0;
     if (!pieces && ism_top_active_branch(s->tape, any) < 0)
         return -1; /* the node's tape has no top min/max left: no label (crease_split.h) */
     if (!pieces && !branch_labels(s, k, branch))
         return -1;
-    double n[8][3];
     /* two corners of one branch whose normals part past normal_cos, or a corner where its
      * branch's gradient or f's (critical) vanishes (its normal is no direction: only the
      * certificate can vouch for the node). f's is asked apart: at a corner on the crease
@@ -295,11 +300,8 @@ static int crease_cell(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl
      * (ism_top_active_branch), so ∇f = ∇b = 0 may sit beside a labelled ∇a that is not
      * (test_plot_test_tie.c). */
     bool disagree = critical;
-    for (int c = 0; c < 8; c++) {
-        if (pieces) /* a corner's own piece: f's gradient there */
-            memcpy(n[c], k->g[c], sizeof n[c]);
-        else
-            corner_gradient(s, k, c, n[c]);
+    for (int c = 0; c < 8 && !pieces; c++) { /* pieces: every n[c] a direction already */
+        corner_gradient(s, k, c, n[c]);
         double len = ism_normalise3(n[c]);
         disagree |= !(len > 0) || !isfinite(len);
     }
