@@ -677,7 +677,9 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri)
 #define CREASE_TURNED_COS (-0.5)
 
 /* A chord between two crease points whose middle lies farther than this share of max_error
- * from the crease (Newton from the middle) leaves its leaf to be split: the chord's
+ * from the crease (Newton from the middle: chord_foot, chord_strays) is followed first: the
+ * cut puts crease points along it (crease_path); where that cannot, or a chord of the leaf's
+ * triangles still strays, the leaf is left to be split (ism_crease_unresolved): the chord's
  * triangles on either side lie that far off their branches near it. */
 #define CREASE_CHORD_SAG 0.5
 

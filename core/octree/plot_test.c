@@ -61,7 +61,8 @@
 
 /* Where f's crease is read off its smooth pieces (crease_split.h's pieces mode) a node whose
  * corners lie on two pieces is judged by its polygons cut along the crease (crease_cell) up
- * to this many bounds across, and one whose corners show three or more pieces (a junction:
+ * to this many bounds across its smallest side (min_side: in a flat or irregular box the
+ * long sides may be several times that, as for CREASE_CELL_ERRORS), and one whose corners show three or more pieces (a junction:
  * a cube's corner) up to CREASE_JUNCTION_ERRORS, when every piece is a plane over the node
  * (PLANE_PIECE_COS); past them the corner test decides, as for any node. Without these the
  * only crease-aware judgement was that of f's top min/max, and the cube, max(|x|, |y|, |z|)
@@ -86,6 +87,10 @@
  * the lower one in the irrational box) yet the quality pass then left 1.05–8.7° triangles
  * there (own / 1e-3 / c037 / 1e-4 boxes) and lost the triple point's vertex: that is the
  * pass's (core/remesh's junction crowd), to lift this when it keeps them. */
+/* 1e-12 is an angle of 1.4e-6 rad: far above the rounding of a normalised dot product
+ * (~1e-16, an exact plane's corner gradients in a shifted box agree to that), far below the
+ * turn of the least curved piece that must be refused (a node of 40 E on a ball of radius R
+ * turns its normals by about 40 E / R: 0.2 rad for E = 5e-3, R = 1). */
 #define PLANE_PIECE_COS (1 - 1e-12)
 
 /* The screen of graph_node_passes: a polygon's triangles err less than the sag at its
@@ -277,6 +282,9 @@ static int piece_labels(ism_sampler *s, const ism_flatness *fl, const double lo[
 /* Under an error bound, a node whose corners lie on both branches of f's top min/max (a
  * CSG crease may pass through it): f's own corner gradients mix the two branches' and never
  * agree, so the node is judged by each branch's gradients at its own corners instead, and
+ * where f's crease is read off its smooth pieces (pieces mode), a node piece_labels labels
+ * (planar pieces, CREASE_PIECES_ERRORS / CREASE_JUNCTION_ERRORS), by f's own corner
+ * gradients, each that of its corner's piece; in both
  * its triangles, cut along the crease (crease_split.h), by what they measure after
  * polygonising (a leaf that misses E is split in the next round). -1: not such a node. The
  * gyroid ball at E = 3e-3 (box ±1.5, depth 7): 312,508 -> 45,482 triangles; at 1e-3, depth

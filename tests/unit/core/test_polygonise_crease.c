@@ -214,11 +214,11 @@ static double steinmetz_dist(const double p[3])
  * and the measurement splits them), no leaf misses E, and the mesh is within E at every vertex,
  * centroid and edge midpoint by the closed form. The cube, 5: its pieces are planes, so its
  * crease nodes are judged by their polygons cut along the crease (exact) once they are at most
- * 40 E across with two pieces, 24 E at a corner (plot_test.c CREASE_PIECES_ERRORS,
- * CREASE_JUNCTION_ERRORS): 40 E = 0.18 takes the depth-4 cells (2.6 / 16 = 0.1625), 24 E = 0.108
- * the depth-5 ones (0.081), so nothing is split past depth 5 (1,248 triangles); before, the
- * uncut corner test split them to depth 7 (9,608 / 9,624 triangles; at depth.max 5, 296 nodes
- * unresolved). */
+ * 40 E across their smallest side with two pieces, 24 E at a corner (plot_test.c
+ * CREASE_PIECES_ERRORS, CREASE_JUNCTION_ERRORS): 40 E = 0.18 takes the depth-4 cells
+ * (2.6 / 16 = 0.1625), 24 E = 0.108 the depth-5 ones (0.081), so nothing is split past depth
+ * 5 (1,248 triangles at bf994e9); before, the uncut corner test split them to depth 7 (9,608 /
+ * 9,624 triangles at d4030da; at depth.max 5, 296 nodes unresolved). */
 static void check_crease_stops(const char *expr, double (*dist)(const double *), int stop)
 {
     const pf_surface s = {expr, NULL, 0, NULL, 0};
