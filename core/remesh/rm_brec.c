@@ -88,30 +88,14 @@ bool rm_brec_open(rm_pass *p)
     size_t n = p->r.cap_tris ? p->r.cap_tris : 1;
     p->brec = malloc(RM_BREC_REC * n * sizeof *p->brec);
     size_t nv = p->r.cap_verts ? p->r.cap_verts : 1;
-    p->offset = malloc(4 * nv * sizeof *p->offset);
     p->bend = malloc(RM_BREC_BEND_REC * nv * sizeof *p->bend);
     p->jws = ism_ivjet_ws_new(p->f);
     p->cen_keep_v = UINT32_MAX;
-    if (!p->brec || !p->offset || !p->bend || !p->jws)
+    if (!p->brec || !p->bend || !p->jws || !(p->offset || rm_offset_open(p)))
         return false;
     /* no point (NaN matches no place): measured when asked */
     for (size_t i = 0; i < RM_BREC_REC * n; i++)
         p->brec[i] = NAN;
-    for (size_t i = 0; i < 4 * nv; i++)
-        p->offset[i] = NAN;
-    /* every vertex's first offset, from rm_normals' batch: no evaluation (one point at a
-       time as the moves asked it, through rm_bound_signed: callgrind --quality good
-       --threads 1, chmutov-quartic own box, ism_quality_pass 295.45M -> 292.63M). Each is
-       paired with its vertex's place now: right only while no vertex has moved since
-       rm_normals (remesh.c opens the records before any step); the count bounds the loop
-       whatever was added. */
-    size_t found = p->found_offset_n < p->r.m->nverts ? p->found_offset_n : p->r.m->nverts;
-    for (size_t v = 0; p->found_offset && v < found; v++) {
-        double *o = p->offset + 4 * v;
-        memcpy(o, p->r.m->pos + 3 * v, 3 * sizeof *o);
-        o[3] = p->found_offset[v];
-    }
-    rm_found_offset_drop(p);
     for (size_t i = 0; i < RM_BREC_BEND_REC * nv; i++) /* no box: NaN holds nothing */
         p->bend[i] = NAN;
     return true;

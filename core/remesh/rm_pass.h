@@ -153,11 +153,12 @@ typedef struct rm_pass {
     double *brec;           /* RM_BREC_REC per triangle, under an error bound in the quality
                                pass (rm_brec.c): its centroid's and edge midpoints' last
                                points measured and bounds on their distances */
-    double *offset;         /* 4 per vertex, with brec: a place and rm_bound_signed there */
+    double *offset;         /* 4 per vertex under an error bound: a place and rm_bound_signed
+                               there (rm_offset_open) */
     double *found_offset;   /* per vertex of the mesh found, or NULL: rm_bound_signed at
-                               its place then, from rm_normals' evaluation (rm_brec_open
-                               takes them into offset and frees this; a pass without the
-                               bounded records frees it at once, rm_found_offset_drop) */
+                               its place then, from rm_normals' evaluation (rm_offset_open
+                               takes them into offset and frees this; a pass that keeps no
+                               offsets frees it at once, rm_found_offset_drop) */
     size_t found_offset_n;  /* vertices found_offset holds: the mesh's count then */
     size_t brec_known, brec_skipped; /* points whose slot held them, and of those the ones
                                         the plain bound spares (rm_brec_pays) */
@@ -179,6 +180,11 @@ bool rm_pass_open(rm_pass *p, ism_mesh *m, const ism_remesh_options *o, size_t e
 /* Drops what collapses removed from m (which had nverts_before and ntris_before vertices and
  * triangles when the pass opened; ren, may be NULL, gets the maps) and frees the state.
  * False when out of memory (m is still valid). */
+/* Every vertex's signed distance kept with its place in p->offset (rm_brec_offset reads it
+ * while the vertex stands there), first from rm_normals' found_offset, which it frees: the
+ * moves under a bound then measure no vertex where it stood. False when out of memory
+ * (offset NULL: each measured when asked). */
+bool rm_offset_open(rm_pass *p);
 bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
                    ism_remesh_renumber *ren);
 
@@ -197,7 +203,7 @@ bool rm_pass_close(rm_pass *p, size_t nverts_before, size_t ntris_before,
 
 /* Unit normals and the vanishing threshold from ∇f at every vertex. False when out of memory. */
 bool rm_normals(rm_pass *p);
-/* The offsets rm_normals kept, freed: for a pass that opens no bounded records. */
+/* The offsets rm_normals kept, freed: for a pass that keeps no offsets (rm_offset_open). */
 static inline void rm_found_offset_drop(rm_pass *p)
 {
     free(p->found_offset);
