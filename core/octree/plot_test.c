@@ -64,10 +64,11 @@
  * to this many bounds across its smallest side (min_side: in a flat or irregular box the
  * long sides may be several times that, as for CREASE_CELL_ERRORS), and one whose corners show three or more pieces (a junction:
  * a cube's corner) up to CREASE_JUNCTION_ERRORS, when every piece is a plane over the node
- * (PLANE_PIECE_COS); past them the corner test decides, as for any node. Without these the
- * only crease-aware judgement was that of f's top min/max, and the cube, max(|x|, |y|, |z|)
- * − 1, has none: every crease node went to the corner test, whose uncut polygons across a
- * 90° crease miss E until depth 7 (152 / 296 / 584 nodes refused at depths 4 / 5 / 6,
+ * (PLANE_PIECE_COS) or the pieces meet at most a right angle apart (CURVED_CREASE_COS); past
+ * them the corner test decides, as for any node. Without these the only crease-aware
+ * judgement was that of f's top min/max, and the cube, max(|x|, |y|, |z|) − 1, has none:
+ * every crease node went to the corner test, whose uncut polygons across a 90° crease miss E
+ * until depth 7 (152 / 296 / 584 nodes refused at depths 4 / 5 / 6,
  * crease25), and the quality pass then cost 1.29–1.33 times the polygonisation (callgrind).
  * Measured, cube, --quality good, default bound (E 4.5e-3), the five cusp22 boxes own / 1e-3
  * / irr / c037 / 1e-4: with no limit the raw mesh is 768 triangles, exact, but the pass
@@ -80,18 +81,29 @@
 #define CREASE_PIECES_ERRORS 40.0
 #define CREASE_JUNCTION_ERRORS 24.0
 
-/* The pieces' judgement of a node (CREASE_PIECES_ERRORS) only where each piece's corner
- * gradients are one direction up to rounding: planes over the node (the cube's faces; not
- * the balls of three-balls or steinmetz's cylinders). Curved pieces in coarse cells changed
- * nothing in the raw mesh at three-balls' triple points (the same 66 vertices within 0.03 of
- * the lower one in the irrational box) yet the quality pass then left 1.05–8.7° triangles
- * there (own / 1e-3 / c037 / 1e-4 boxes) and lost the triple point's vertex: that is the
- * pass's (core/remesh's junction crowd), to lift this when it keeps them. */
-/* 1e-12 is an angle of 1.4e-6 rad: far above the rounding of a normalised dot product
- * (~1e-16, an exact plane's corner gradients in a shifted box agree to that), far below the
- * turn of the least curved piece that must be refused (a node of 40 E on a ball of radius R
- * turns its normals by about 40 E / R: 0.2 rad for E = 5e-3, R = 1). */
+/* The pieces' judgement of a node (CREASE_PIECES_ERRORS) where each piece's corner gradients
+ * are one direction up to rounding: planes over the node (the cube's faces), whatever angle
+ * they meet at; curved pieces only as open creases (CURVED_CREASE_COS). 1e-12 is an angle of
+ * 1.4e-6 rad: far above the rounding of a normalised dot product (~1e-16, an exact plane's
+ * corner gradients in a shifted box agree to that), far below the turn of the least curved
+ * piece (a node of 40 E on a ball of radius R turns its normals by about 40 E / R: 0.2 rad
+ * for E = 5e-3, R = 1). */
 #define PLANE_PIECE_COS (1 - 1e-12)
+
+/* Curved pieces are judged so where they meet at most a right angle apart: at every corner
+ * each other piece of the node's gradient (ism_eval_piece_gradient, the piece continued past
+ * its region) within 90° of the corner's own. Sharper creases of curved pieces in coarse
+ * cells leave the quality pass needles where three meet (the pass's junction crowd, stein26):
+ * --quality good, default bound, the five cusp22 boxes own / 1e-3 / irr / c037 / 1e-4, with
+ * curved pieces admitted at any angle: three-balls (balls of r² 0.5 meeting 95° apart) 20.3
+ * / 0.83 / 18.4 / 1.51 / 1.21°, and the same balls negated (max of −ball: convex creases,
+ * the same point set) 10.8 / 0.83 / 20.9 / 20.3 / 1.04°, while r² 0.6 (84° apart) gave 20.7 /
+ * 20.1 / 13.4 / 5.33 / 21.0° (5.33 is main's c037 figure too) and r² 0.8 (71°) 20.1 / 20.1 /
+ * 17.5 / 19.3 / 20.0° (main 10.3–14.4°). Convexity does not separate them; the angle does.
+ * Steinmetz's cylinders meet at most 60° apart (x² at the crease y = ±z): 9,024 -> 2,040 raw
+ * triangles, 20.4 / 20.1 / 15.1 / 11.2 / 20.7° (main 19.3 / 12.5 / 11.7 / 13.3 / 19.1°). The
+ * cube's planes meet at exactly 90° and are PLANE_PIECE_COS's, with no such need. */
+#define CURVED_CREASE_COS 0.0
 
 /* The screen of graph_node_passes: a polygon's triangles err less than the sag at its
  * centroid (a quad's diagonal midpoint is its centroid; a fan's triangles lie between the
@@ -209,18 +221,24 @@ static bool branch_labels(ism_sampler *s, const ism_corners *k, ism_piece branch
     return seen == 3;
 }
 
-/* The corners' unit normals n (f's gradients): how many directions, PLANE_PIECE_COS apart,
- * they point in; 0 where a normal is no direction or there are more than `most`. The screen
- * before any piece is evaluated (a curved sheet's eight corners point eight ways; the gyroid
- * ball's nodes stop here). */
-static int few_directions(const ism_corners *k, double n[8][3], int most)
+/* The corners' unit normals n (f's gradients): false where one is no direction. */
+static bool corner_normals(const ism_corners *k, double n[8][3])
 {
-    int dir[8], ndir = 0;
     for (int c = 0; c < 8; c++) {
         memcpy(n[c], k->g[c], sizeof n[c]);
         double len = ism_normalise3(n[c]);
         if (!(len > 0) || !isfinite(len))
-            return 0;
+            return false;
+    }
+    return true;
+}
+
+/* How many directions, PLANE_PIECE_COS apart, the corners' unit normals n point in; 0 where
+ * there are more than `most` (a curved sheet's eight corners point eight ways). */
+static int few_directions(const double n[8][3], int most)
+{
+    int dir[8], ndir = 0;
+    for (int c = 0; c < 8; c++) {
         int d = 0;
         while (d < ndir && !(ism_dot3(n[c], n[dir[d]]) >= PLANE_PIECE_COS))
             d++;
@@ -243,24 +261,51 @@ static bool plane_pieces(const double n[8][3], const ism_piece branch[8])
     return true;
 }
 
+/* Every corner's other pieces' normals within CURVED_CREASE_COS of its own normal n (each
+ * piece's gradient asked once a corner). */
+static bool open_creases(ism_sampler *s, const ism_corners *k, const double n[8][3],
+                         const ism_piece branch[8])
+{
+    for (int j = 0; j < 8; j++)
+        for (int i = 0; i < 8; i++) {
+            bool asked = branch[i] == branch[j];
+            for (int h = 0; h < i && !asked; h++)
+                asked = branch[h] == branch[i];
+            if (asked)
+                continue;
+            double g[3];
+            s->n_point++;
+            ism_eval_piece_gradient(s->tape, s->ws, branch[i], k->p[j][0], k->p[j][1],
+                                    k->p[j][2], g);
+            double len = ism_normalise3(g);
+            if (!(len > 0) || !isfinite(len) || !(ism_dot3(g, n[j]) >= CURVED_CREASE_COS))
+                return false;
+        }
+    return true;
+}
+
 /* A node's corners show at most this many smooth pieces where they are planes (few_
  * directions' screen): a cube's corner shows three faces. */
 #define PLANE_PIECES_MOST 4
 
 /* In pieces mode, the corners' labels by their smooth piece (ism_eval_piece, the labels
  * ism_crease_split cuts by), for a node within CREASE_PIECES_ERRORS (two pieces) or
- * CREASE_JUNCTION_ERRORS (more) whose pieces are planes: how many pieces the corners show
- * (2, or 3 for three or more), with the corners' unit normals n (f's gradients, each its own
- * piece's); 0 where the node is not judged so. Corners whose normals all point one way are
- * not asked their pieces: two planes with one normal meet in no crease over the node (flat
- * nodes of a cube's face stop here). */
+ * CREASE_JUNCTION_ERRORS (more) whose pieces are planes or meet as open creases
+ * (CURVED_CREASE_COS): how many pieces the corners show (2, or 3 for three or more), with
+ * the corners' unit normals n (f's gradients, each its own piece's); 0 where the node is not
+ * judged so. A node's tape with no kink left over it, or corners whose normals all point one
+ * way, are not asked their pieces: one piece, or two planes with one normal meeting in no
+ * crease over the node (flat nodes of a cube's face stop here). */
 static int piece_labels(ism_sampler *s, const ism_flatness *fl, const double lo[3],
                         const double hi[3], const ism_corners *k, ism_piece branch[8],
                         double n[8][3])
 {
     double size = min_side(lo, hi);
-    if (!(size <= CREASE_PIECES_ERRORS * fl->max_error) ||
-        few_directions(k, n, PLANE_PIECES_MOST) < 2)
+    if (!(size <= CREASE_PIECES_ERRORS * fl->max_error) || ism_tape_kinks(s->tape) == 0 ||
+        !corner_normals(k, n))
+        return 0;
+    int dirs = few_directions(n, PLANE_PIECES_MOST);
+    if (dirs == 1)
         return 0;
     ism_piece other = ISM_PIECE_NONE;
     int np = 1;
@@ -276,14 +321,16 @@ static int piece_labels(ism_sampler *s, const ism_flatness *fl, const double lo[
     }
     if (np == 1 || (np == 3 && !(size <= CREASE_JUNCTION_ERRORS * fl->max_error)))
         return 0;
-    return plane_pieces(n, branch) ? np : 0;
+    if (dirs > 1 && plane_pieces(n, branch))
+        return np;
+    return open_creases(s, k, n, branch) ? np : 0;
 }
 
 /* Under an error bound, a node whose corners lie on both branches of f's top min/max (a
  * CSG crease may pass through it): f's own corner gradients mix the two branches' and never
  * agree, so the node is judged by each branch's gradients at its own corners instead, and
  * where f's crease is read off its smooth pieces (pieces mode), a node piece_labels labels
- * (planar pieces, CREASE_PIECES_ERRORS / CREASE_JUNCTION_ERRORS), by f's own corner
+ * (planar pieces or open creases, CREASE_PIECES_ERRORS / CREASE_JUNCTION_ERRORS), by f's own corner
  * gradients, each that of its corner's piece; in both
  * its triangles, cut along the crease (crease_split.h), by what they measure after
  * polygonising (a leaf that misses E is split in the next round). -1: not such a node. The

@@ -210,15 +210,18 @@ static double steinmetz_dist(const double p[3])
  * depth.max 7 the mesh met E (15,800; closed form 0.0031). The certificate now encloses ∇f on
  * each side of the kink (graph_cert.c): both faces rise along one direction, so the node is
  * one graph and its measured triangles decide. Three placements: depth.max `stop` and 10 give
- * the same mesh (Steinmetz 8: at 7 its cylinders' chords sag 0.0055-0.0062 by the closed form
- * and the measurement splits them), no leaf misses E, and the mesh is within E at every vertex,
- * centroid and edge midpoint by the closed form. The cube, 5: its pieces are planes, so its
- * crease nodes are judged by their polygons cut along the crease (exact) once they are at most
- * 40 E across their smallest side with two pieces, 24 E at a corner (plot_test.c
- * CREASE_PIECES_ERRORS, CREASE_JUNCTION_ERRORS): 40 E = 0.18 takes the depth-4 cells
- * (2.6 / 16 = 0.1625), 24 E = 0.108 the depth-5 ones (0.081), so nothing is split past depth
- * 5 (1,248 triangles at bf994e9); before, the uncut corner test split them to depth 7 (9,608 /
- * 9,624 triangles at d4030da; at depth.max 5, 296 nodes unresolved). */
+ * the same mesh, no leaf misses E, and the mesh is within E at every vertex, centroid and edge
+ * midpoint by the closed form. Steinmetz, 5: its cylinders meet at most 60° apart (normals
+ * (x, y, 0) and (x, 0, z) on the crease y = ±z: cos = x² >= 1/2), an open crease, so its
+ * crease nodes are judged by their cut polygons within the same limits as the cube's
+ * (plot_test.c CURVED_CREASE_COS): 2,040 triangles; before, at depth.max 5, 3,336 with 224
+ * nodes unresolved against 9,024 at 10 (the uncut corner test split to depth 8). The cube, 5:
+ * its pieces are planes, so its crease nodes are judged by their polygons cut along the crease
+ * (exact) once they are at most 40 E across their smallest side with two pieces, 24 E at a
+ * corner (plot_test.c CREASE_PIECES_ERRORS, CREASE_JUNCTION_ERRORS): 40 E = 0.18 takes the
+ * depth-4 cells (2.6 / 16 = 0.1625), 24 E = 0.108 the depth-5 ones (0.081), so nothing is
+ * split past depth 5 (1,248 triangles at bf994e9); before, the uncut corner test split them
+ * to depth 7 (9,608 / 9,624 triangles at d4030da; at depth.max 5, 296 nodes unresolved). */
 static void check_crease_stops(const char *expr, double (*dist)(const double *), int stop)
 {
     const pf_surface s = {expr, NULL, 0, NULL, 0};
@@ -259,7 +262,7 @@ Test(crease, cube_creases_stop_where_the_bound_is_met)
 
 Test(crease, steinmetz_creases_stop_where_the_bound_is_met)
 {
-    check_crease_stops("max(x^2 + y^2, y^2 + z^2, z^2 + x^2) - 1", steinmetz_dist, 8);
+    check_crease_stops("max(x^2 + y^2, y^2 + z^2, z^2 + x^2) - 1", steinmetz_dist, 5);
 }
 
 /* The three balls' creases at the default bound (1e-3 × the diagonal of the box ±1.5, depth.max
