@@ -60,24 +60,24 @@
 #define CREASE_CELL_ERRORS 4.0
 
 /* Where f's crease is read off its smooth pieces (crease_split.h's pieces mode) a node whose
- * corners lie on two pieces is judged by its polygons cut along the crease (crease_cell) up
- * to this many bounds across its smallest side (min_side: in a flat or irregular box the
- * long sides may be several times that, as for CREASE_CELL_ERRORS), and one whose corners show three or more pieces (a junction:
- * a cube's corner) up to CREASE_JUNCTION_ERRORS, when every piece is a plane over the node
- * (PLANE_PIECE_COS) or the pieces meet at most a right angle apart (CURVED_CREASE_COS); past
- * them the corner test decides, as for any node. Without these the only crease-aware
- * judgement was that of f's top min/max, and the cube, max(|x|, |y|, |z|) − 1, has none:
- * every crease node went to the corner test, whose uncut polygons across a 90° crease miss E
- * until depth 7 (152 / 296 / 584 nodes refused at depths 4 / 5 / 6,
- * crease25), and the quality pass then cost 1.29–1.33 times the polygonisation (callgrind).
- * Measured, cube, --quality good, default bound (E 4.5e-3), the five cusp22 boxes own / 1e-3
- * / irr / c037 / 1e-4: with no limit the raw mesh is 768 triangles, exact, but the pass
- * loses corner vertices and leaves 8.7–8.9° triangles there (its junction fans too coarse);
- * both limits 24 E (nodes of 18 E, depth 5 of the ±1.3 box): 2,064 raw, 20.4–21.5°, pass /
- * polygonise 0.94 / 0.97 / 1.10 / 1.06 / 0.96 (env hooks); two pieces 40 E (36 E, depth 4), junctions
- * 24 E: 1,248 raw, 16.8 / 18.9 / 12.4 / 17.1 / 16.8° (main: 18.1 / 14.5 / 10.1 / 12.9 /
- * 17.9°), pass / polygonise 0.90 / 0.92 / 0.86 / 0.87 / 0.91 (main 1.29 own, 1.30 irr, 1.33
- * c037; the whole run 499M -> 67M own); 80 E for two pieces: 7.3–10.0°. */
+ * corners lie on two pieces is judged by its polygons cut along the crease (crease_cell) up to
+ * this many bounds across its smallest side (min_side: in a flat or irregular box the long
+ * sides may be several times that, as for CREASE_CELL_ERRORS), and one whose corners show three
+ * or more pieces (a junction: a cube's corner) up to CREASE_JUNCTION_ERRORS, when every piece
+ * is a plane over the node (PLANE_PIECE_COS) or the pieces meet at most a right angle apart
+ * (CURVED_CREASE_COS); past them the corner test decides, as for any node. Without these the
+ * only crease-aware judgement was that of f's top min/max, and the cube, max(|x|, |y|, |z|) −
+ * 1, has none: every crease node went to the corner test, whose uncut polygons across a 90°
+ * crease miss E until depth 7 (152 / 296 / 584 nodes refused at depths 4 / 5 / 6, crease25),
+ * and the quality pass then cost 1.29–1.33 times the polygonisation (callgrind). Measured,
+ * cube, --quality good, default bound (E 4.5e-3), the five cusp22 boxes own / 1e-3 / irr / c037
+ * / 1e-4: with no limit the raw mesh is 768 triangles, exact, but the pass loses corner
+ * vertices and leaves 8.7–8.9° triangles there (its junction fans too coarse); both limits 24 E
+ * (nodes of 18 E, depth 5 of the ±1.3 box): 2,064 raw, 20.4–21.5°, pass / polygonise 0.94 /
+ * 0.97 / 1.10 / 1.06 / 0.96 (env hooks); two pieces 40 E (36 E, depth 4), junctions 24 E: 1,248
+ * raw, 16.8 / 18.9 / 12.4 / 17.1 / 16.8° (main: 18.1 / 14.5 / 10.1 / 12.9 / 17.9°), pass /
+ * polygonise 0.90 / 0.92 / 0.86 / 0.87 / 0.91 (main 1.29 own, 1.30 irr, 1.33 c037; the whole
+ * run 499M -> 67M own); 80 E for two pieces: 7.3–10.0°. */
 #define CREASE_PIECES_ERRORS 40.0
 #define CREASE_JUNCTION_ERRORS 24.0
 

@@ -104,6 +104,26 @@ static size_t crease_angles(const ism_cell_out *out, const double off[3], const 
     return n;
 }
 
+/* The quad of corners at radii r (angles ±ARC/2) in placement `placed`, cut within node
+ * (relative to the placement): the angles of its crease points into angle (at most `most`);
+ * returns how many. */
+static size_t quad_crease_angles(const double r[4], const double node[6], const double off[3],
+                                 int placed, double *angle, size_t most)
+{
+    const double th[4] = {-ARC / 2, -ARC / 2, ARC / 2, ARC / 2};
+    ism_tape *t = circle_crease(off);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    ism_fpoint pts[4];
+    polygon(pts, 4, r, th, off);
+    ism_cell_out out;
+    cr_expect(cut(t, ws, pts, 4, node, off, &out), "placement %d: not cut", placed);
+    size_t n = crease_angles(&out, off, node, angle, most, placed);
+    ism_cell_out_free(&out);
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+    return n;
+}
+
 /* A quad across the circle over ARC: its two mixed edges meet the circle at ±ARC/2; the path
  * points are the circle's points at −ARC/4, 0, ARC/4 (in order along the chord: their angles
  * are the chord's parameter's order), inside the node. */
@@ -111,18 +131,12 @@ Test(crease_path, follows_the_circle_between_the_ends)
 {
     double offs[3][3];
     placements(offs);
-    const double r[4] = {0.8, 1.2, 1.2, 0.8}, th[4] = {-ARC / 2, -ARC / 2, ARC / 2, ARC / 2};
+    const double r[4] = {0.8, 1.2, 1.2, 0.8};
     const double node[6] = {0.5, -0.6, -0.1, 1.3, 0.6, 0.1};
     const double want[2 + PATH_POINTS] = {-ARC / 2, -ARC / 4, 0, ARC / 4, ARC / 2};
     for (int placed = 0; placed < 3; placed++) {
-        ism_tape *t = circle_crease(offs[placed]);
-        ism_eval_ws *ws = ism_eval_ws_new(t);
-        ism_fpoint pts[4];
-        polygon(pts, 4, r, th, offs[placed]);
-        ism_cell_out out;
-        cr_expect(cut(t, ws, pts, 4, node, offs[placed], &out), "placement %d: not cut", placed);
         double angle[2 + PATH_POINTS + 4];
-        size_t n = crease_angles(&out, offs[placed], node, angle, 2 + PATH_POINTS + 4, placed);
+        size_t n = quad_crease_angles(r, node, offs[placed], placed, angle, 2 + PATH_POINTS + 4);
         cr_expect_eq(n, 2 + PATH_POINTS, "placement %d: %zu crease points", placed, n);
         for (size_t i = 0; i < n && i < 2 + PATH_POINTS; i++) {
             bool found = false;
@@ -130,9 +144,6 @@ Test(crease_path, follows_the_circle_between_the_ends)
                 found |= fabs(angle[i] - want[j]) <= ANGLE_TOL;
             cr_expect(found, "placement %d: a crease point at angle %.12g", placed, angle[i]);
         }
-        ism_cell_out_free(&out);
-        ism_eval_ws_free(ws);
-        ism_tape_free(t);
     }
 }
 
@@ -143,20 +154,11 @@ Test(crease_path, no_path_where_a_foot_leaves_the_node)
 {
     double offs[3][3];
     placements(offs);
-    const double r[4] = {0.8, 1.03, 1.03, 0.8}, th[4] = {-ARC / 2, -ARC / 2, ARC / 2, ARC / 2};
+    const double r[4] = {0.8, 1.03, 1.03, 0.8};
     const double node[6] = {0.5, -0.6, -0.1, 0.99, 0.6, 0.1};
     for (int placed = 0; placed < 3; placed++) {
-        ism_tape *t = circle_crease(offs[placed]);
-        ism_eval_ws *ws = ism_eval_ws_new(t);
-        ism_fpoint pts[4];
-        polygon(pts, 4, r, th, offs[placed]);
-        ism_cell_out out;
-        cr_expect(cut(t, ws, pts, 4, node, offs[placed], &out), "placement %d: not cut", placed);
         double angle[8];
-        size_t n = crease_angles(&out, offs[placed], node, angle, 8, placed);
+        size_t n = quad_crease_angles(r, node, offs[placed], placed, angle, 8);
         cr_expect_eq(n, 2, "placement %d: %zu crease points", placed, n);
-        ism_cell_out_free(&out);
-        ism_eval_ws_free(ws);
-        ism_tape_free(t);
     }
 }

@@ -9,8 +9,9 @@
  * closed-form distance of their centroids and edge midpoints. Beside it, a side 2.5 E off
  * (past the old limit of 2 E) cut within E, and one past SIDE_SPLIT_MAX refused. The first
  * try's halves miss because its triangles face against ∇f (their halves too:
- * ism_dual_centroid_within_at), the second's are the same corners wound along ∇f. Three placements: the box moved as everywhere (tests/unit/
- * placements.h) and the pair turned to another place on the sphere in each. */
+ * ism_dual_centroid_within_at), the second's are the same corners wound along ∇f. Three
+ * placements: the box moved as everywhere (tests/unit/placements.h) and the pair turned to
+ * another place on the sphere in each. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
