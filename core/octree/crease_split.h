@@ -38,7 +38,8 @@ bool ism_crease_split(ism_sampler *s, ism_cell_out *out, size_t first_tri);
  * wedge between them and its pieces turn over (cube-minus-ball's face z = −1 beside its
  * crease circle: triangles facing +z). Under a bound (s->dist_above), on a top min/max of two
  * branches, a chord that strays from the crease is replaced by crease points along it, shared
- * by both polygons (crease_split.c crease_path). *done false (nothing emitted) when the polygon is
+ * by both polygons where the path leaves both ends into the polygon (crease_split.c
+ * follow_crease; else the chord stays). *done false (nothing emitted) when the polygon is
  * not cut: one branch, more than two mixed edges, or no crease point found. False when out
  * of memory. */
 bool ism_crease_cut_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,

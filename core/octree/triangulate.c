@@ -45,8 +45,7 @@ bool ism_cell_out_segment(ism_cell_out *out, const ism_fpoint *a, const ism_fpoi
     return true;
 }
 
-/* Newell's normal of the polygon (twice its vector area). */
-static void newell(const ism_fpoint *p, size_t n, double nrm[3])
+void ism_newell(const ism_fpoint *p, size_t n, double nrm[3])
 {
     nrm[0] = nrm[1] = nrm[2] = 0;
     for (size_t i = 0; i < n; i++) {
@@ -100,7 +99,7 @@ static double corner_vote(ism_sampler *s, const double node[6], const double c[3
 static bool reversed(ism_sampler *s, const double node[6], const ism_fpoint *p, size_t n)
 {
     double nrm[3], g[3] = {0, 0, 0};
-    newell(p, n, nrm);
+    ism_newell(p, n, nrm);
     bool facing = false, away = false;
     for (size_t i = 0; i < n; i++) {
         double u[3] = {p[i].g[0], p[i].g[1], p[i].g[2]};

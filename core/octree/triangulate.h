@@ -28,6 +28,11 @@ bool ism_loop_reversed(ism_sampler *s, const double node[6], const ism_fpoint *p
 bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                            const double node[6], double max_error, bool flip, ism_cell_out *out);
 
+/* Newell's normal of the closed polygon p[0..n) into nrm: twice its vector area, the
+ * polygon running counterclockwise round it (its inside on the left of each edge seen from
+ * the normal's tip). */
+void ism_newell(const ism_fpoint *p, size_t n, double nrm[3]);
+
 /* Triangulates the closed polygon pts[0..n) (n >= 2) as a fan around apex, a point inside
  * the node where the polygon's sheet meets other sheets. */
 bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,

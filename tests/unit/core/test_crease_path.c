@@ -104,35 +104,41 @@ static size_t crease_angles(const ism_cell_out *out, const double off[3], const 
     return n;
 }
 
-/* The quad of corners at radii r (angles ±ARC/2) in placement `placed`, cut within node
+/* The polygon of n ≤ 8 corners at radii r, angles th in placement `placed`, cut within node
  * (relative to the placement): the angles of its crease points into angle (at most `most`);
  * returns how many. */
+static size_t cut_crease_angles(const double *r, const double *th, size_t n,
+                                const double node[6], const double off[3], int placed,
+                                double *angle, size_t most)
+{
+    ism_tape *t = circle_crease(off);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    ism_fpoint pts[8];
+    polygon(pts, n, r, th, off);
+    ism_cell_out out;
+    cr_expect(cut(t, ws, pts, n, node, off, &out), "placement %d: not cut", placed);
+    size_t m = crease_angles(&out, off, node, angle, most, placed);
+    ism_cell_out_free(&out);
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+    return m;
+}
+
+/* The same for the quad of corners at radii r, angles ±ARC/2. */
 static size_t quad_crease_angles(const double r[4], const double node[6], const double off[3],
                                  int placed, double *angle, size_t most)
 {
     const double th[4] = {-ARC / 2, -ARC / 2, ARC / 2, ARC / 2};
-    ism_tape *t = circle_crease(off);
-    ism_eval_ws *ws = ism_eval_ws_new(t);
-    ism_fpoint pts[4];
-    polygon(pts, 4, r, th, off);
-    ism_cell_out out;
-    cr_expect(cut(t, ws, pts, 4, node, off, &out), "placement %d: not cut", placed);
-    size_t n = crease_angles(&out, off, node, angle, most, placed);
-    ism_cell_out_free(&out);
-    ism_eval_ws_free(ws);
-    ism_tape_free(t);
-    return n;
+    return cut_crease_angles(r, th, 4, node, off, placed, angle, most);
 }
 
-/* A quad across the circle over ARC: its two mixed edges meet the circle at ±ARC/2; the path
- * points are the circle's points at −ARC/4, 0, ARC/4 (in order along the chord: their angles
- * are the chord's parameter's order), inside the node. */
-Test(crease_path, follows_the_circle_between_the_ends)
+/* The quad of corners at radii r cut within node in the three placements: its crease points
+ * are the ends at ±ARC/2 and the path's PATH_POINTS at −ARC/4, 0, ARC/4, each at its closed-
+ * form angle. */
+static void expect_path(const double r[4], const double node[6])
 {
     double offs[3][3];
     placements(offs);
-    const double r[4] = {0.8, 1.2, 1.2, 0.8};
-    const double node[6] = {0.5, -0.6, -0.1, 1.3, 0.6, 0.1};
     const double want[2 + PATH_POINTS] = {-ARC / 2, -ARC / 4, 0, ARC / 4, ARC / 2};
     for (int placed = 0; placed < 3; placed++) {
         double angle[2 + PATH_POINTS + 4];
@@ -145,6 +151,16 @@ Test(crease_path, follows_the_circle_between_the_ends)
             cr_expect(found, "placement %d: a crease point at angle %.12g", placed, angle[i]);
         }
     }
+}
+
+/* A quad across the circle over ARC: its two mixed edges meet the circle at ±ARC/2; the path
+ * points are the circle's points at −ARC/4, 0, ARC/4 (in order along the chord: their angles
+ * are the chord's parameter's order), inside the node. */
+Test(crease_path, follows_the_circle_between_the_ends)
+{
+    const double r[4] = {0.8, 1.2, 1.2, 0.8};
+    const double node[6] = {0.5, -0.6, -0.1, 1.3, 0.6, 0.1};
+    expect_path(r, node);
 }
 
 /* A quad over the same arc, its outer corners at radius 1.03 (x ≤ 1.03 cos 0.3 = 0.984), in a
@@ -160,5 +176,51 @@ Test(crease_path, no_path_where_a_foot_leaves_the_node)
         double angle[8];
         size_t n = quad_crease_angles(r, node, offs[placed], placed, angle, 8);
         cr_expect_eq(n, 2, "placement %d: %zu crease points", placed, n);
+    }
+}
+
+/* The quad of no_path_where_a_foot_leaves_the_node (outer corners at radius 1.03: its outer
+ * side, x ≤ 0.984, passes inside the foot (1, 0)) in a node that holds the foot: the path
+ * lies past the polygon's outer side, as a curved leaf polygon's may (Barth's at 0.0259 reach
+ * 0.20 of their chord past it), but leaves both ends into the polygon (each end's point at
+ * ±ARC/4 lies on the quad's side of its radial edge) and is kept: the same 3 points as
+ * follows_the_circle_between_the_ends. */
+Test(crease_path, a_path_past_a_far_side_is_kept)
+{
+    const double r[4] = {0.8, 1.03, 1.03, 0.8};
+    const double node[6] = {0.5, -0.6, -0.1, 1.3, 0.6, 0.1};
+    expect_path(r, node);
+}
+
+/* revC 1: a hexagon that holds most of the circle, one corner Q inside it (radius 0.9, angle
+ * 135°) between two outside (radius 1.3, angles 95° and 175°): its sides at Q cut the circle
+ * at two points near 135° ± 20° whose chord is short, and the crease inside the hexagon is
+ * the long arc round the far side. Newton from the chord's middle goes radially out to the
+ * short arc (angle 135°, sag 0.02-0.03 > E/2), past the hexagon's sides at Q: a path there
+ * put the run polygons' triangles outside the hexagon (over a neighbour's): its point leaves
+ * each end 0.105 of the chord outward past the side the end lies on. The chord must stay:
+ * the cut's crease points are its two ends only, and none lies on the short arc between them
+ * (closed form: its angle strictly between the ends'). */
+Test(crease_path, no_path_onto_an_arc_outside_the_polygon)
+{
+    double offs[3][3];
+    placements(offs);
+    const double deg = M_PI / 180;
+    const double r[6] = {0.9, 1.3, 1.6, 1.6, 1.6, 1.3};
+    const double th[6] = {135 * deg, 175 * deg, 250 * deg, 330 * deg, 390 * deg, 455 * deg};
+    const double node[6] = {-1.7, -1.7, -0.1, 1.7, 1.7, 0.1};
+    for (int placed = 0; placed < 3; placed++) {
+        double angle[8];
+        size_t n = cut_crease_angles(r, th, 6, node, offs[placed], placed, angle, 8);
+        cr_expect_eq(n, 2, "placement %d: %zu crease points", placed, n);
+        if (n >= 2 && n <= 8) {
+            double a0 = fmin(angle[0], angle[1]), a1 = fmax(angle[0], angle[1]);
+            cr_expect(a0 > 90 * deg && a1 < 180 * deg && a1 - a0 < 90 * deg,
+                      "placement %d: ends at %g, %g rad", placed, angle[0], angle[1]);
+            for (size_t i = 2; i < n; i++)
+                cr_expect(!(angle[i] > a0 && angle[i] < a1),
+                          "placement %d: a crease point on the arc outside, at %g rad", placed,
+                          angle[i]);
+        }
     }
 }
