@@ -21,8 +21,7 @@
  * batch is padded up to whole groups by repeating its last box. */
 #include "core/eval/avx2_clone.h"
 #include "core/eval/interval_jet_ws.h"
-#include "core/eval/interval_ops.h"
-#include "core/eval/lanes4.h"
+#include "core/eval/interval_lanes.h"
 #include "core/expr/tape.h"
 #include "core/util/cache_line.h"
 
@@ -31,12 +30,6 @@
 
 #define VL ISM_IVG_VL
 _Static_assert(VL == 4, "a group of lanes is one v4d (lanes4.h)");
-typedef unsigned long long v4u __attribute__((vector_size(VL * sizeof(double))));
-
-/* An interval per lane. */
-typedef struct vi {
-    v4d lo, hi;
-} vi;
 
 /* One register of a group: the value and the three first partials (the records' layout:
  * interval_jet_ws.h). */
@@ -45,44 +38,12 @@ typedef struct vj {
 } vj;
 _Static_assert(sizeof(vj) == 8 * VL * sizeof(double), "a group's register is 8 vectors");
 
-INLINE v4d splat(double x) { return (v4d){x, x, x, x}; }
-
-/* a where m is set, else b */
-INLINE v4d pick(v4i m, v4d a, v4d b) { return (v4d)(((v4i)a & m) | ((v4i)b & ~m)); }
-
-INLINE v4d vabs(v4d x) { return (v4d)((v4u)x & (v4u){~0ull >> 1, ~0ull >> 1, ~0ull >> 1, ~0ull >> 1}); }
-
-/* interval_ops.h's down1 / up1, min / max (ism_min: a < b ? a : b) and nan_to */
-INLINE v4d vdown1(v4d x)
-{
-    return (x - splat(ISM_ROUND1_ABS)) - vabs(x) * splat(ISM_ROUND1_REL);
-}
-INLINE v4d vup1(v4d x)
-{
-    return (x + splat(ISM_ROUND1_ABS)) + vabs(x) * splat(ISM_ROUND1_REL);
-}
-INLINE v4d vmin(v4d a, v4d b) { return pick(a < b, a, b); }
-INLINE v4d vmax(v4d a, v4d b) { return pick(a > b, a, b); }
-INLINE v4d vnan_to(v4d x, double c) { return pick(x == x, x, splat(c)); }
-
 INLINE vi ivz(void) { return (vi){splat(0.0), splat(0.0)}; }
 
 /* is_zero: both bounds ±0 */
 INLINE v4i iz(vi u) { return (v4i)((((v4u)u.lo | (v4u)u.hi) << 1) == (v4u){0, 0, 0, 0}); }
 
 INLINE vi vpick(v4i m, vi a, vi b) { return (vi){pick(m, a.lo, b.lo), pick(m, a.hi, b.hi)}; }
-
-INLINE vi v_add(vi a, vi b) { return (vi){vdown1(a.lo + b.lo), vup1(a.hi + b.hi)}; }
-INLINE vi v_sub(vi a, vi b) { return (vi){vdown1(a.lo - b.hi), vup1(a.hi - b.lo)}; }
-INLINE vi v_neg(vi a) { return (vi){-a.hi, -a.lo}; }
-
-/* iv_mul: the four corner products (a NaN one, 0 × inf, as 0), min / max in min4's order */
-INLINE vi v_mul(vi a, vi b)
-{
-    v4d p1 = vnan_to(a.lo * b.lo, 0.0), p2 = vnan_to(a.lo * b.hi, 0.0);
-    v4d p3 = vnan_to(a.hi * b.lo, 0.0), p4 = vnan_to(a.hi * b.hi, 0.0);
-    return (vi){vdown1(vmin(vmin(p1, p2), vmin(p3, p4))), vup1(vmax(vmax(p1, p2), vmax(p3, p4)))};
-}
 
 INLINE vi v_mul_c(vi a, double c)
 {
@@ -100,14 +61,6 @@ INLINE vi v_div_c(vi a, double c)
 
 INLINE vi v_add_c(vi a, double c) { return (vi){vdown1(a.lo + splat(c)), vup1(a.hi + splat(c))}; }
 INLINE vi v_c_sub(double c, vi a) { return (vi){vdown1(splat(c) - a.hi), vup1(splat(c) - a.lo)}; }
-
-INLINE vi v_square(vi a)
-{
-    v4d l2 = a.lo * a.lo, h2 = a.hi * a.hi;
-    v4d inner = pick(a.hi <= splat(0.0), h2, splat(0.0));
-    v4d lo = pick(a.lo >= splat(0.0), l2, inner);
-    return (vi){vmax(vdown1(lo), splat(0.0)), vup1(vmax(l2, h2))};
-}
 
 /* iv_powi lane by lane (its branches differ by lane; integer powers are rare) */
 INLINE vi v_powi(vi a, unsigned n)

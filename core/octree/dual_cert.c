@@ -1,12 +1,20 @@
 /* dual_cert.c — enclosures and proofs over one box for the dual mesher (dual_cert.h). */
 #include "core/octree/dual_cert.h"
+#include "core/eval/avx2_clone.h"
+#include "core/eval/interval_lanes.h"
 #include "core/eval/interval_ops.h"
 
 #include <math.h>
 
+/* The larger of two bounds, a's when they are equal (so -0 against +0 too), the number
+ * over a NaN: glibc's fmax (C leaves the sign of a zero result open), written out so that
+ * the sub-box lanes below (vmeet) take the same bits; fmin likewise. */
+static double max_bound(double a, double b) { return a >= b || b != b ? a : b; }
+static double min_bound(double a, double b) { return a <= b || b != b ? a : b; }
+
 static ism_interval meet(ism_interval a, ism_interval b)
 {
-    return iv(fmax(a.lo, b.lo), fmin(a.hi, b.hi));
+    return iv(max_bound(a.lo, b.lo), min_bound(a.hi, b.hi));
 }
 
 bool ism_dual_taylor(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
@@ -161,6 +169,19 @@ static int verdict(const ism_ivgrad *g, const double *d)
     return slope.lo > 0 ? 1 : slope.hi <= 0 ? -1 : 0;
 }
 
+/* verdict_of from the form v2 and the enclosure g already taken (ok: over_dx's answer; g
+ * and ok not read when v2 keeps f from 0). */
+static int verdict_from(ism_interval v2, bool ok, const ism_ivgrad *g, const double *d,
+                        ism_interval *v)
+{
+    if (v2.lo > 0 || v2.hi < 0)
+        return FREE;
+    if (!ok)
+        return -1;
+    *v = g->v;
+    return verdict(g, d);
+}
+
 /* The verdict on lo..hi by m's enclosure (ism_dual_over), the cheapest part first: when
  * the second-order form alone keeps f from 0, the enclosure's value (its meet with two
  * more forms) does too, and the verdict is FREE without the ∇f bounds (most of the cost;
@@ -172,10 +193,8 @@ static int verdict_of(const ism_dual_model *m, const ism_interval dx[3], ism_int
     if (v2.lo > 0 || v2.hi < 0)
         return FREE;
     ism_ivgrad g;
-    if (!over_dx(m, dx, v2, &g))
-        return -1;
-    *v = g.v;
-    return verdict(&g, d);
+    bool ok = over_dx(m, dx, v2, &g);
+    return verdict_from(v2, ok, &g, d, v);
 }
 
 static int verdict_over(const ism_dual_model *m, const double lo[3], const double hi[3],
@@ -186,65 +205,140 @@ static int verdict_over(const ism_dual_model *m, const double lo[3], const doubl
     return verdict_of(m, dx, second_order(m, dx), d, v);
 }
 
-/* The second-order form's terms (ism_dual_terms_of) over the 8 sub-boxes of lo..hi halved
- * at mid (NULL: the centre), from the two halves along each axis: x − c over each half
- * (dx), its linear and diagonal terms, and the off-diagonal ones over each pair of halves.
- * A sub-box's terms are those of its halves — the same operations on the same intervals as
- * ism_dual_terms_of on its own box, so its form has the same bounds — at 42 interval
- * products a box instead of 120 (8 boxes of 15); the sub-boxes' verdicts were ~60% of a
- * proof's cost on the torus at 1e-2. */
-typedef struct halves_terms {
-    ism_interval dx[3][2], lin[3][2], diag[3][2], off[3][2][2]; /* off: xy, xz, yz */
-} halves_terms;
+/* What m says of each of the 8 sub-boxes of lo..hi halved at mid (NULL: the centre; bit a
+ * of k the upper half along a): f's second-order form (form[k], ism_dual_second_order's
+ * bounds) and the enclosure (g[k], ok[k]: ism_dual_over's), four sub-boxes a step in lanes
+ * (interval_lanes.h). Each lane takes the same operations on the same intervals as the
+ * scalar code on its own box (x − c over each half as round_centre takes it, the terms in
+ * ism_dual_terms_of's operand order, summed in ism_dual_terms_f's, then over_dx's steps), so
+ * the same bits. Why: one by one, with the terms shared between the sub-boxes by halves (42
+ * interval products for 8 boxes) and an enclosure taken wherever the form held 0, the
+ * sub-boxes' verdicts were ~1.6M of the torus's 22.2M instructions at 1e-2 (~7K a proof). */
+typedef struct sub_encl {
+    ism_interval form[8];
+    ism_ivgrad g[8];
+    bool ok[8];
+} sub_encl;
 
-static int pair_of(int a, int b) { return a + b - 1; } /* (0,1) 0, (0,2) 1, (1,2) 2 */
-
-static void halves_terms_of(const ism_dual_model *m, const double lo[3], const double *mid,
-                            const double hi[3], halves_terms *h)
+/* meet on lanes: max_bound / min_bound's choices */
+INLINE vi vmeet(vi a, vi b)
 {
+    return (vi){pick((a.lo >= b.lo) | (b.lo != b.lo), a.lo, b.lo),
+                pick((a.hi <= b.hi) | (b.hi != b.hi), a.hi, b.hi)};
+}
+
+/* iv_mul_c(u, 0.5) */
+INLINE vi v_half(vi u) { return (vi){vdown1(u.lo * splat(0.5)), vup1(u.hi * splat(0.5))}; }
+
+/* Lane j: half (k >> a & 1) of axis a for sub-box k = 4 q + j. */
+INLINE vi lanes_of(const ism_interval h[2], int q, int a)
+{
+    ism_interval u[4];
+    for (int j = 0; j < 4; j++)
+        u[j] = h[(4 * q + j) >> a & 1];
+    return (vi){{u[0].lo, u[1].lo, u[2].lo, u[3].lo}, {u[0].hi, u[1].hi, u[2].hi, u[3].hi}};
+}
+
+INLINE void store_lanes(vi u, ism_interval *out, size_t stride)
+{
+    double lo[4], hi[4];
+    v4_st(lo, u.lo);
+    v4_st(hi, u.hi);
+    for (int j = 0; j < 4; j++)
+        *(ism_interval *)((char *)out + j * stride) = iv(lo[j], hi[j]);
+}
+
+/* Sub-boxes 4 q .. 4 q + 3 of sub_encl (dxh: x − c over each half along each axis); their
+ * enclosures only when some form holds 0, unless every. */
+INLINE void group_encl(const ism_dual_model *m, const ism_interval dxh[3][2], int q,
+                       bool every, sub_encl *out)
+{
+    const ism_ivjet *j = &m->box;
+    const ism_ivgrad *c = &m->at;
+    vi dx[3];
+    for (int a = 0; a < 3; a++)
+        dx[a] = lanes_of(dxh[a], q, a);
+    vi f = v_splat(c->v); /* second_order */
+    for (int a = 0; a < 3; a++) {
+        f = v_add(f, v_mul(v_splat(c->d[a]), dx[a]));
+        for (int b = a; b < 3; b++) {
+            vi h = v_splat(j->h[ism_dual_hess_at(a, b)]);
+            f = v_add(f, b == a ? v_half(v_mul(h, v_square(dx[a])))
+                                : v_mul(h, v_mul(dx[a], dx[b])));
+        }
+    }
+    store_lanes(f, &out->form[4 * q], sizeof(ism_interval));
+    v4i open = (v4i)(f.lo <= splat(0.0)) & (v4i)(f.hi >= splat(0.0));
+    if (!every && !(open[0] | open[1] | open[2] | open[3]))
+        return; /* every form keeps f from 0: no verdict reads the enclosures */
+    vi gd[3]; /* over_dx */
+    v4i ok = (v4i){-1, -1, -1, -1};
+    for (int a = 0; a < 3; a++) {
+        vi d = v_splat(c->d[a]);
+        for (int b = 0; b < 3; b++)
+            d = v_add(d, v_mul(v_splat(j->h[ism_dual_hess_at(a, b)]), dx[b]));
+        gd[a] = vmeet(v_splat(j->d[a]), d);
+        ok &= (v4i)(gd[a].lo <= gd[a].hi);
+    }
+    vi v1 = v_splat(c->v);
+    for (int a = 0; a < 3; a++)
+        v1 = v_add(v1, v_mul(gd[a], dx[a]));
+    vi gv = vmeet(v_splat(j->v), vmeet(v1, f));
+    ok &= (v4i)(gv.lo <= gv.hi);
+    store_lanes(gv, &out->g[4 * q].v, sizeof(ism_ivgrad));
+    for (int a = 0; a < 3; a++)
+        store_lanes(gd[a], &out->g[4 * q].d[a], sizeof(ism_ivgrad));
+    for (int i = 0; i < 4; i++)
+        out->ok[4 * q + i] = ok[i] != 0;
+}
+
+#if ISM_HAVE_AVX2_CLONE
+ISM_AVX2_CLONE static void encls_avx2(const ism_dual_model *m, const ism_interval dxh[3][2],
+                                      bool every, sub_encl *out)
+{
+    group_encl(m, dxh, 0, every, out);
+    group_encl(m, dxh, 1, every, out);
+}
+#endif
+
+static void encls_base(const ism_dual_model *m, const ism_interval dxh[3][2], bool every,
+                       sub_encl *out)
+{
+    group_encl(m, dxh, 0, every, out);
+    group_encl(m, dxh, 1, every, out);
+}
+
+/* sub_encl of m's sub-boxes; the enclosures of a group of four whose forms all keep f from
+ * 0 only when every (g, ok undefined there otherwise). */
+static void sub_encls(const ism_dual_model *m, const double lo[3], const double *mid,
+                      const double hi[3], bool every, sub_encl *out)
+{
+    ism_interval dxh[3][2];
     for (int a = 0; a < 3; a++) {
         double cut = mid ? mid[a] : 0.5 * lo[a] + 0.5 * hi[a];
         ism_interval c = iv(m->c[a], m->c[a]);
-        h->dx[a][0] = iv_sub(iv(lo[a], cut), c);
-        h->dx[a][1] = iv_sub(iv(cut, hi[a]), c);
+        dxh[a][0] = iv_sub(iv(lo[a], cut), c);
+        dxh[a][1] = iv_sub(iv(cut, hi[a]), c);
     }
-    const ism_ivjet *j = &m->box;
-    for (int a = 0; a < 3; a++)
-        for (int s = 0; s < 2; s++) {
-            ism_interval dx = h->dx[a][s];
-            h->lin[a][s] = iv_mul(m->at.d[a], dx);
-            h->diag[a][s] = iv_mul_c(iv_mul(j->h[ism_dual_hess_at(a, a)], iv_square(dx)), 0.5);
-            for (int b = a + 1; b < 3; b++)
-                for (int t = 0; t < 2; t++)
-                    h->off[pair_of(a, b)][s][t] =
-                        iv_mul(j->h[ism_dual_hess_at(a, b)], iv_mul(dx, h->dx[b][t]));
-        }
+#if ISM_HAVE_AVX2_CLONE
+    if (ISM_RUN_AVX2()) {
+        encls_avx2(m, (const ism_interval (*)[2])dxh, every, out);
+        return;
+    }
+#endif
+    encls_base(m, (const ism_interval (*)[2])dxh, every, out);
 }
 
-/* Sub-box k's form's bounds (second_order's), and its x − c into dx unless NULL. */
-static ism_interval sub_form(const ism_dual_model *m, const halves_terms *h, int k,
-                             ism_interval *dx)
+void ism_dual_sub_encls(const ism_dual_model *m, const double lo[3], const double *mid,
+                        const double hi[3], ism_interval form[8], ism_ivgrad g[8], bool ok[8])
 {
-    ism_dual_terms t;
-    for (int a = 0; a < 3; a++) {
-        int s = k >> a & 1;
-        if (dx)
-            dx[a] = h->dx[a][s];
-        t.lin[a] = h->lin[a][s];
-        t.quad[ism_dual_hess_at(a, a)] = h->diag[a][s];
-        for (int b = a + 1; b < 3; b++)
-            t.quad[ism_dual_hess_at(a, b)] = h->off[pair_of(a, b)][s][k >> b & 1];
+    sub_encl se;
+    sub_encls(m, lo, mid, hi, true, &se);
+    for (int k = 0; k < 8; k++) {
+        form[k] = se.form[k];
+        g[k] = se.g[k];
+        ok[k] = se.ok[k];
     }
-    return ism_dual_terms_f(m->at.v, &t);
-}
-
-void ism_dual_sub_forms(const ism_dual_model *m, const double lo[3], const double *mid,
-                        const double hi[3], ism_interval f[8])
-{
-    halves_terms h;
-    halves_terms_of(m, lo, mid, hi, &h);
-    for (int k = 0; k < 8; k++)
-        f[k] = sub_form(m, &h, k, NULL);
 }
 
 /* How nearly f's enclosure v (holding 0) is centred on 0: min(−lo, hi) / width, in [0, ½].
@@ -276,12 +370,10 @@ static int prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
     int open[8], nopen = 0;
     double score[8];
     uint8_t shown = 0;
-    halves_terms ht;
-    halves_terms_of(m, lo, mid, hi, &ht);
+    sub_encl se;
+    sub_encls(m, lo, mid, hi, false, &se);
     for (int k = 0; k < 8; k++) {
-        ism_interval dx[3];
-        ism_interval v2 = sub_form(m, &ht, k, dx);
-        v = verdict_of(m, dx, v2, d, &encl);
+        v = verdict_from(se.form[k], se.ok[k], &se.g[k], d, &encl);
         if (v == FREE)
             shown |= (uint8_t)(1u << k);
         if (v < 0)

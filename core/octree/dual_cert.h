@@ -60,12 +60,13 @@ bool ism_dual_over_v2(const ism_dual_model *m, const double lo[3], const double 
 ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
                                    const double hi[3]);
 
-/* ism_dual_second_order's bounds on each sub-box k of lo..hi halved at mid (NULL: the
- * centre; bit a of k the upper half along a), from terms taken once per half and pair of
- * halves (the proofs on the sub-boxes take them so). Kept public as the unit tests' view
- * of that halving (test_dual_cert.c: bit for bit ism_dual_second_order on each sub-box). */
-void ism_dual_sub_forms(const ism_dual_model *m, const double lo[3], const double *mid,
-                        const double hi[3], ism_interval f[8]);
+/* What the model m says of each sub-box k of lo..hi halved at mid (NULL: the centre; bit a
+ * of k the upper half along a), as the proofs on the sub-boxes take it (four sub-boxes a step
+ * in lanes): form[k], ism_dual_second_order's bounds on the sub-box, and g[k] / ok[k],
+ * ism_dual_over's enclosure and answer there. Kept public as the unit tests' view of those
+ * lanes (test_dual_cert.c: bit for bit the scalar functions on each sub-box). */
+void ism_dual_sub_encls(const ism_dual_model *m, const double lo[3], const double *mid,
+                        const double hi[3], ism_interval form[8], ism_ivgrad g[8], bool ok[8]);
 
 /* Both in one: f and ∇f over lo..hi by its own model. */
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],

@@ -446,17 +446,19 @@ Test(dual_cert, halves_shown_free_are_free)
     ism_tape_free(t);
 }
 
-/* ism_dual_sub_forms (the terms taken once per half and pair of halves, as the proofs on the
- * sub-boxes take them) gives each sub-box ism_dual_second_order's bounds on its own box, to
- * the bit: cells round the torus's tube of three sizes, on and off the lattice (1e-3 and
- * √2 − 1 of a cell), halved at the centre (NULL) and at 0.3 / 0.7 of each side. A half or a
- * pair of halves taken for the wrong sub-box shows as a differing bound. */
+/* ism_dual_sub_encls (four sub-boxes a step in lanes, as the proofs on the sub-boxes take
+ * them) gives each sub-box ism_dual_second_order's bounds and ism_dual_over's enclosure and
+ * answer on its own box, to the bit: cells round the torus's tube of three sizes, on and off
+ * the lattice (1e-3 and √2 − 1 of a cell), halved at the centre (NULL) and at 0.3 / 0.7 of
+ * each side. A half taken for the wrong sub-box, a lane stored at the wrong place or a step
+ * out of the scalar order shows as a differing bound; both answers of ism_dual_over occur
+ * only where some enclosure holds 0 (counted: the sub-boxes whose form holds 0). */
 Test(dual_cert, sub_box_forms_are_their_own_forms)
 {
     ism_tape *t = pf_compile(&pf_ring_torus);
     ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
     cr_assert(jw);
-    size_t boxes = 0;
+    size_t boxes = 0, open = 0;
     for (int i = 0; i < 2592; i += 7) {
         double lo[3], hi[3];
         ism_dual_model m;
@@ -467,7 +469,9 @@ Test(dual_cert, sub_box_forms_are_their_own_forms)
             for (int a = 0; a < 3; a++)
                 mid[a] = at == 0 ? 0.5 * lo[a] + 0.5 * hi[a] : lo[a] + frac * (hi[a] - lo[a]);
             ism_interval f[8];
-            ism_dual_sub_forms(&m, lo, at == 0 ? NULL : mid, hi, f);
+            ism_ivgrad g[8];
+            bool ok[8];
+            ism_dual_sub_encls(&m, lo, at == 0 ? NULL : mid, hi, f, g, ok);
             for (int k = 0; k < 8; k++) {
                 double sl[3], sh[3];
                 halve(lo, mid, hi, k, sl, sh);
@@ -475,11 +479,19 @@ Test(dual_cert, sub_box_forms_are_their_own_forms)
                 cr_assert(memcmp(&f[k], &want, sizeof want) == 0,
                           "cell %d, halving %d, sub-box %d: [%a, %a] vs [%a, %a]", i, at, k,
                           f[k].lo, f[k].hi, want.lo, want.hi);
+                ism_ivgrad wg;
+                bool wok = ism_dual_over(&m, sl, sh, &wg);
+                cr_assert_eq(ok[k], wok, "cell %d, halving %d, sub-box %d", i, at, k);
+                cr_assert(!wok || memcmp(&g[k], &wg, sizeof wg) == 0,
+                          "cell %d, halving %d, sub-box %d: [%a, %a] vs [%a, %a]", i, at, k,
+                          g[k].v.lo, g[k].v.hi, wg.v.lo, wg.v.hi);
+                open += want.lo <= 0 && want.hi >= 0;
             }
             boxes++;
         }
     }
     cr_assert(boxes > 1000, "%zu", boxes);
+    cr_assert(open > boxes, "%zu sub-boxes whose form holds 0", open);
     ism_ivjet_ws_free(jw);
     ism_tape_free(t);
 }

@@ -1,0 +1,63 @@
+/* interval_lanes.h — interval_ops.h's common operations on four intervals at once (lanes4.h's
+ * v4d, lower and upper bounds apart), lane by lane the same IEEE operations in the same order
+ * as the scalar ones, so each lane's bits are the scalar operation's: the outward rounding
+ * (down1 / up1), products from their four corner products in iv_mul's order (a NaN corner,
+ * 0 × inf, counted as 0), squares as iv_square. For the batched interval gradient pass
+ * (eval_interval_grad_batch.c) and the dual mesher's sub-box enclosures (octree/dual_cert.c).
+ * INLINE helpers only (lanes4.h's rule). */
+#ifndef ISM_INTERVAL_LANES_H
+#define ISM_INTERVAL_LANES_H
+
+#include "core/eval/interval_ops.h"
+#include "core/eval/lanes4.h"
+
+typedef unsigned long long v4u __attribute__((vector_size(4 * sizeof(double))));
+
+/* An interval per lane. */
+typedef struct vi {
+    v4d lo, hi;
+} vi;
+
+INLINE v4d splat(double x) { return (v4d){x, x, x, x}; }
+
+/* a where m is set, else b */
+INLINE v4d pick(v4i m, v4d a, v4d b) { return (v4d)(((v4i)a & m) | ((v4i)b & ~m)); }
+
+INLINE v4d vabs(v4d x) { return (v4d)((v4u)x & (v4u){~0ull >> 1, ~0ull >> 1, ~0ull >> 1, ~0ull >> 1}); }
+
+/* interval_ops.h's down1 / up1, min / max (ism_min: a < b ? a : b) and nan_to */
+INLINE v4d vdown1(v4d x)
+{
+    return (x - splat(ISM_ROUND1_ABS)) - vabs(x) * splat(ISM_ROUND1_REL);
+}
+INLINE v4d vup1(v4d x)
+{
+    return (x + splat(ISM_ROUND1_ABS)) + vabs(x) * splat(ISM_ROUND1_REL);
+}
+INLINE v4d vmin(v4d a, v4d b) { return pick(a < b, a, b); }
+INLINE v4d vmax(v4d a, v4d b) { return pick(a > b, a, b); }
+INLINE v4d vnan_to(v4d x, double c) { return pick(x == x, x, splat(c)); }
+
+INLINE vi v_splat(ism_interval u) { return (vi){splat(u.lo), splat(u.hi)}; }
+
+INLINE vi v_add(vi a, vi b) { return (vi){vdown1(a.lo + b.lo), vup1(a.hi + b.hi)}; }
+INLINE vi v_sub(vi a, vi b) { return (vi){vdown1(a.lo - b.hi), vup1(a.hi - b.lo)}; }
+INLINE vi v_neg(vi a) { return (vi){-a.hi, -a.lo}; }
+
+/* iv_mul: the four corner products (a NaN one, 0 × inf, as 0), min / max in min4's order */
+INLINE vi v_mul(vi a, vi b)
+{
+    v4d p1 = vnan_to(a.lo * b.lo, 0.0), p2 = vnan_to(a.lo * b.hi, 0.0);
+    v4d p3 = vnan_to(a.hi * b.lo, 0.0), p4 = vnan_to(a.hi * b.hi, 0.0);
+    return (vi){vdown1(vmin(vmin(p1, p2), vmin(p3, p4))), vup1(vmax(vmax(p1, p2), vmax(p3, p4)))};
+}
+
+INLINE vi v_square(vi a)
+{
+    v4d l2 = a.lo * a.lo, h2 = a.hi * a.hi;
+    v4d inner = pick(a.hi <= splat(0.0), h2, splat(0.0));
+    v4d lo = pick(a.lo >= splat(0.0), l2, inner);
+    return (vi){vmax(vdown1(lo), splat(0.0)), vup1(vmax(l2, h2))};
+}
+
+#endif
