@@ -195,6 +195,11 @@ typedef struct ism_locus {
     uint64_t centre_dropped;    /* cells the search dropped by f at their centre against the
                                    parent's Taylor form (search.c, children_quad): tests see
                                    that test ran; not in the JSON stats */
+    uint64_t grads_batched;     /* cells whose interval gradients the search took in one batch
+                                   with their siblings' (search.c pre_gradients), and how many
+                                   of those classify then read (none dropped before): tests
+                                   see the batch ran and wasted no lane; not in the JSON stats */
+    uint64_t grads_batch_read;
     double time_ms;
     double hessian_scale;       /* the largest Hessian norm sampled over the box (set by the
                                    search; 0 = unknown): the absolute scale below which a

@@ -559,6 +559,8 @@ static bool search_below(ctx *x, const ism_lbox *b, const double lo[3], const do
     x->out->evals_interval += sub.evals_interval;
     x->out->evals_jet += sub.evals_jet;
     x->out->centre_dropped += sub.centre_dropped;
+    x->out->grads_batched += sub.grads_batched;
+    x->out->grads_batch_read += sub.grads_batch_read;
     for (size_t j = 0; ok && j < sub.nboxes; j++)
         if ((sub.boxes[j].flags & ISM_LBOX_UNIQUE)
             || ((sub.boxes[j].flags & ISM_LBOX_PROJECTED) && sub.boxes[j].rank >= min_rank))

@@ -128,6 +128,8 @@ typedef struct worker {
     uint8_t *kinks, *force;
     uint64_t visited, evals_interval, evals_jet;
     uint64_t centre_dropped; /* cells the centre test (children_quad) dropped */
+    uint64_t grads_batched;  /* cells whose gradients pre_gradients took */
+    uint64_t grads_batch_read; /* ... and classify read */
 } worker;
 
 /* One task's output: surviving children (their models indexed within models) and boxes, in
@@ -152,6 +154,7 @@ typedef struct search {
     task_out *outs;
     double hscale;          /* the Hessian scale of the box (hessian_scale) */
     bool branches;          /* t holds a min, max or abs: a gradient pass may meet a kink */
+    bool batch;             /* the children's gradients in batches (pre_gradients) */
     atomic_int stop;        /* 1 deadline, 2 cancel, 3 budget */
     atomic_size_t kept;     /* cells and boxes kept so far in this level */
 } search;
@@ -577,9 +580,10 @@ static int classify(const search *s, worker *w, const ism_interval x[3], const i
      * partials instead, and smooth_tests' jet over the same box then computes only the
      * Hessian from them (interval_jet.h: the same bits). heart 4,037 jets, cross-cap 2,093. */
     size_t nk = 0;
-    if (pre && pre->ok)
+    if (pre && pre->ok) {
         g = pre->g;
-    else
+        w->grads_batch_read++;
+    } else
         nk = s->branches ? ism_eval_interval_grad(s->t, w->jw, x, NULL, w->kinks, &g)
                          : ism_eval_interval_grad_kept(s->t, w->jw, x, &g);
     w->evals_interval++;
@@ -840,7 +844,7 @@ static void pre_gradients(const search *s, worker *w, const int v[8], const ism_
     size_t n = 0;
     for (int m = 0; m < 8; m++)
         pre[m].ok = false;
-    if (s->branches)
+    if (s->branches || !s->batch)
         return;
     for (int m = 0; m < 8 && n < ISM_IVGRAD_BATCH / 2; m++)
         if (v[m] == OPEN && !centre_drops(fc[m], q))
@@ -859,6 +863,7 @@ static void pre_gradients(const search *s, worker *w, const int v[8], const ism_
         return;
     for (size_t k = 0; k < n; k++)
         pre[kid[k]] = (pre_grad){ true, g[k], g[n + k] };
+    w->grads_batched += n;
 }
 
 /* Expands p: its eight children's F intervals in one batch, screened; then, when p has a
@@ -1093,11 +1098,17 @@ static bool subdivide(search *s, vec *boxes)
 bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *out,
                      ism_error *err)
 {
+    return ism_sing_search_batched(f, o, true, out, err);
+}
+
+bool ism_sing_search_batched(const ism_tape *f, const ism_locus_options *o, bool batch,
+                             ism_locus *out, ism_error *err)
+{
     double t0 = ism_now_ms();
     if (!check_options(o, err))
         return false;
     search s = { .t = f, .o = o, .depth = o->max_depth, .unit = ldexp(1.0, -o->max_depth),
-                 .branches = ism_tape_has_kink(f) };
+                 .branches = ism_tape_has_kink(f), .batch = batch };
     for (int k = 0; k < 3; k++) {
         s.lo[k] = o->box[k];
         s.hi[k] = o->box[k + 3];
@@ -1131,6 +1142,8 @@ bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *o
         out->evals_interval += s.workers[i].evals_interval;
         out->evals_jet += s.workers[i].evals_jet;
         out->centre_dropped += s.workers[i].centre_dropped;
+        out->grads_batched += s.workers[i].grads_batched;
+        out->grads_batch_read += s.workers[i].grads_batch_read;
     }
     free(boxes.p);
     free_workers(&s);

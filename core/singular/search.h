@@ -41,4 +41,11 @@ int ism_sing_rank(const double eig[3], double hscale);
 bool ism_sing_search(const ism_tape *f, const ism_locus_options *o, ism_locus *out,
                      ism_error *err);
 
+/* ism_sing_search with the children's interval gradients taken in batches (search.c
+ * pre_gradients; ism_sing_search's way) or, batch false, one by one: the same boxes and the
+ * same counters bit for bit either way, the batch only faster (test_search_batch.c holds
+ * the two to that); out->grads_batched counts the cells it took. */
+bool ism_sing_search_batched(const ism_tape *f, const ism_locus_options *o, bool batch,
+                             ism_locus *out, ism_error *err);
+
 #endif

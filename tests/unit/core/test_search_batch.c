@@ -1,0 +1,82 @@
+/* test_search_batch.c — the singular search with its children's interval gradients taken in
+ * batches (search.c pre_gradients: a parent's children that classify will test, their
+ * gradients over their boxes and at their centres in one ism_eval_interval_grad_batch)
+ * against the same search taking them one by one (ism_sing_search_batched, batch false): the
+ * same candidate boxes (bounds, projected centre, rank, flags) and the same counters, bit
+ * for bit, and the batch ran (grads_batched > 0) and classify read every record it took
+ * (grads_batch_read: a child batched that the centre test then drops wastes its lanes). A
+ * batch record given to the wrong child or the box's gradient read for the centre's (g[k] /
+ * g[n + k]) would move a box or a count here. The cross-cap (pinch points and a
+ * double segment: cells kept to the finest level along it) and Kummer's 16 nodes, in three
+ * placements (pf_sweep_box). */
+#include <criterion/criterion.h>
+#include <string.h>
+#include "poly_fixture.h"
+#include "test_eval_surfaces.h"
+#include "core/singular/search.h"
+
+/* The search of t over box at depth, batched or not, into l (asserted complete). */
+static void search(const ism_tape *t, const double box[6], int depth, bool batch, ism_locus *l)
+{
+    ism_locus_options o;
+    ism_locus_options_default(&o);
+    memcpy(o.box, box, sizeof o.box);
+    o.max_depth = depth;
+    o.threads = 1;
+    ism_locus_init(l);
+    ism_error err;
+    cr_assert(ism_sing_search_batched(t, &o, batch, l, &err), "%s", err.message);
+    cr_assert(!l->incomplete, "%s", l->incomplete_why);
+}
+
+static void expect_same(const ism_tape *t, const char *name, const double base[6], int depth)
+{
+    for (int w = pf_first_box() - 1; w < 2; w++) {
+        double box[6];
+        pf_sweep_box(base, depth, w, box);
+        ism_locus a, b;
+        search(t, box, depth, true, &a);
+        search(t, box, depth, false, &b);
+        cr_expect_gt(a.grads_batched, 0, "%s box %d: no gradient taken in a batch", name, w);
+        cr_expect_eq(b.grads_batched, 0, "%s box %d: batched with the batch off", name, w);
+        cr_expect_eq(a.grads_batch_read, a.grads_batched,
+                     "%s box %d: %llu records batched, %llu read", name, w,
+                     (unsigned long long)a.grads_batched, (unsigned long long)a.grads_batch_read);
+        cr_expect_gt(a.centre_dropped, 0, "%s box %d: the centre test dropped nothing", name, w);
+        cr_expect_eq(a.boxes_visited, b.boxes_visited, "%s box %d: cells visited", name, w);
+        cr_expect_eq(a.evals_interval, b.evals_interval, "%s box %d: interval evaluations", name,
+                     w);
+        cr_expect_eq(a.evals_jet, b.evals_jet, "%s box %d: jets", name, w);
+        cr_expect_eq(a.centre_dropped, b.centre_dropped, "%s box %d: centre drops", name, w);
+        cr_expect(a.hessian_scale == b.hessian_scale, "%s box %d: Hessian scale", name, w);
+        cr_expect_eq(a.nboxes, b.nboxes, "%s box %d: %zu boxes batched, %zu one by one", name, w,
+                     a.nboxes, b.nboxes);
+        cr_expect_gt(a.nboxes, 0, "%s box %d: no candidate box", name, w);
+        for (size_t i = 0; i < a.nboxes && i < b.nboxes; i++) {
+            const ism_lbox *p = &a.boxes[i], *q = &b.boxes[i];
+            cr_expect(!memcmp(p->lo, q->lo, sizeof p->lo) && !memcmp(p->hi, q->hi, sizeof p->hi) &&
+                          !memcmp(p->q, q->q, sizeof p->q) && p->rank == q->rank &&
+                          p->flags == q->flags,
+                      "%s box %d: candidate %zu differs", name, w, i);
+        }
+        ism_locus_free(&a);
+        ism_locus_free(&b);
+    }
+}
+
+Test(search_batch, cross_cap_batched_as_one_by_one)
+{
+    pf_surface s = {"4*x^2*(x^2 + y^2 + z^2 + z) + y^2*(y^2 + z^2 - 1)", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double box[6] = {-1.3, -1.3, -1.6, 1.3, 1.3, 1.4};
+    expect_same(t, "cross-cap", box, 6 - pf_quick());
+    ism_tape_free(t);
+}
+
+Test(search_batch, kummer_16_nodes_batched_as_one_by_one)
+{
+    const test_surface *s = test_surface_named("kummer-16-nodes");
+    ism_tape *t = test_surface_compile(s);
+    expect_same(t, s->name, s->box, 7 - pf_quick());
+    ism_tape_free(t);
+}
