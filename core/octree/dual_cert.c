@@ -205,20 +205,26 @@ static int verdict_over(const ism_dual_model *m, const double lo[3], const doubl
     return verdict_of(m, dx, second_order(m, dx), d, v);
 }
 
-/* What m says of each of the 8 sub-boxes of lo..hi halved at mid (NULL: the centre; bit a
- * of k the upper half along a): f's second-order form (form[k], ism_dual_second_order's
- * bounds) and the enclosure (g[k], ok[k]: ism_dual_over's), four sub-boxes a step in lanes
- * (interval_lanes.h). Each lane takes the same operations on the same intervals as the
- * scalar code on its own box (x − c over each half as round_centre takes it, the terms in
- * ism_dual_terms_of's operand order, summed in ism_dual_terms_f's, then over_dx's steps), so
- * the same bits. Why: one by one, with the terms shared between the sub-boxes by halves (42
- * interval products for 8 boxes) and an enclosure taken wherever the form held 0, the
- * sub-boxes' verdicts were ~1.6M of the torus's 22.2M instructions at 1e-2 (~7K a proof). */
-typedef struct sub_encl {
-    ism_interval form[8];
-    ism_ivgrad g[8];
-    bool ok[8];
-} sub_encl;
+/* Models' second-order forms and enclosures in lanes, four boxes a step (interval_lanes.h):
+ * for box k, f's second-order form (form, ism_dual_second_order's bounds) and the
+ * enclosure (g, ok: ism_dual_over's). Each lane takes the same operations on the same
+ * intervals as the scalar code on its own box (x − c as round_centre takes it, the terms
+ * in ism_dual_terms_of's operand order, summed in ism_dual_terms_f's, then over_dx's
+ * steps), so the same bits. Two uses: the 8 sub-boxes of a proof from its node's model
+ * (sub_encls; one by one, with the terms shared by halves, 42 interval products for 8
+ * boxes, and an enclosure wherever the form held 0, they were ~1.6M of the torus's 22.2M
+ * instructions at 1e-2, ~7K a proof), and the nodes whose models were made at once
+ * (ism_dual_over_many). */
+typedef struct lane_out {
+    ism_interval form[4];
+    ism_ivgrad g[4];
+    bool ok[4];
+} lane_out;
+
+/* A model per lane: the centre's value and gradient, the box's Hessian, gradient, value. */
+typedef struct vmodel {
+    vi cv, cd[3], h[6], jd[3], jv;
+} vmodel;
 
 /* meet on lanes: max_bound / min_bound's choices */
 INLINE vi vmeet(vi a, vi b)
@@ -230,13 +236,31 @@ INLINE vi vmeet(vi a, vi b)
 /* iv_mul_c(u, 0.5) */
 INLINE vi v_half(vi u) { return (vi){vdown1(u.lo * splat(0.5)), vup1(u.hi * splat(0.5))}; }
 
-/* Lane j: half (k >> a & 1) of axis a for sub-box k = 4 q + j. */
-INLINE vi lanes_of(const ism_interval h[2], int q, int a)
+/* Lane j: *u[j]. */
+INLINE vi gather(const ism_interval *const u[4])
 {
-    ism_interval u[4];
-    for (int j = 0; j < 4; j++)
-        u[j] = h[(4 * q + j) >> a & 1];
-    return (vi){{u[0].lo, u[1].lo, u[2].lo, u[3].lo}, {u[0].hi, u[1].hi, u[2].hi, u[3].hi}};
+    return (vi){{u[0]->lo, u[1]->lo, u[2]->lo, u[3]->lo}, {u[0]->hi, u[1]->hi, u[2]->hi, u[3]->hi}};
+}
+
+/* Lane j: m[j]'s part (one model in every lane when all four are the same). */
+INLINE void gather_model(const ism_dual_model *const m[4], vmodel *M)
+{
+    const ism_interval *u[4];
+#define GATHER(dst, field)                  \
+    do {                                    \
+        for (int j = 0; j < 4; j++)         \
+            u[j] = &m[j]->field;            \
+        (dst) = gather(u);                  \
+    } while (0)
+    GATHER(M->cv, at.v);
+    GATHER(M->jv, box.v);
+    for (int a = 0; a < 3; a++) {
+        GATHER(M->cd[a], at.d[a]);
+        GATHER(M->jd[a], box.d[a]);
+    }
+    for (int e = 0; e < 6; e++)
+        GATHER(M->h[e], box.h[e]);
+#undef GATHER
 }
 
 INLINE void store_lanes(vi u, ism_interval *out, size_t stride)
@@ -248,70 +272,115 @@ INLINE void store_lanes(vi u, ism_interval *out, size_t stride)
         *(ism_interval *)((char *)out + j * stride) = iv(lo[j], hi[j]);
 }
 
-/* Sub-boxes 4 q .. 4 q + 3 of sub_encl (dxh: x − c over each half along each axis); their
- * enclosures only when some form holds 0, unless every. */
-INLINE void group_encl(const ism_dual_model *m, const ism_interval dxh[3][2], int q,
-                       bool every, sub_encl *out)
+/* Four boxes' forms and enclosures (x − c over them in dx); the enclosures only when some
+ * form holds 0, unless every (g undefined and ok false otherwise). */
+INLINE void lanes_encl(const vmodel *M, const vi dx[3], bool every, lane_out *out)
 {
-    const ism_ivjet *j = &m->box;
-    const ism_ivgrad *c = &m->at;
-    vi dx[3];
-    for (int a = 0; a < 3; a++)
-        dx[a] = lanes_of(dxh[a], q, a);
-    vi f = v_splat(c->v); /* second_order */
+    vi f = M->cv; /* second_order */
     for (int a = 0; a < 3; a++) {
-        f = v_add(f, v_mul(v_splat(c->d[a]), dx[a]));
+        f = v_add(f, v_mul(M->cd[a], dx[a]));
         for (int b = a; b < 3; b++) {
-            vi h = v_splat(j->h[ism_dual_hess_at(a, b)]);
+            vi h = M->h[ism_dual_hess_at(a, b)];
             f = v_add(f, b == a ? v_half(v_mul(h, v_square(dx[a])))
                                 : v_mul(h, v_mul(dx[a], dx[b])));
         }
     }
-    store_lanes(f, &out->form[4 * q], sizeof(ism_interval));
+    store_lanes(f, out->form, sizeof(ism_interval));
     v4i open = (v4i)(f.lo <= splat(0.0)) & (v4i)(f.hi >= splat(0.0));
-    if (!every && !(open[0] | open[1] | open[2] | open[3]))
-        return; /* every form keeps f from 0: no verdict reads the enclosures */
+    if (!every && !(open[0] | open[1] | open[2] | open[3])) {
+        for (int j = 0; j < 4; j++) /* every form keeps f from 0: no verdict reads g */
+            out->ok[j] = false;     /* (ok set all the same: a bool is passed on) */
+        return;
+    }
     vi gd[3]; /* over_dx */
     v4i ok = (v4i){-1, -1, -1, -1};
     for (int a = 0; a < 3; a++) {
-        vi d = v_splat(c->d[a]);
+        vi d = M->cd[a];
         for (int b = 0; b < 3; b++)
-            d = v_add(d, v_mul(v_splat(j->h[ism_dual_hess_at(a, b)]), dx[b]));
-        gd[a] = vmeet(v_splat(j->d[a]), d);
+            d = v_add(d, v_mul(M->h[ism_dual_hess_at(a, b)], dx[b]));
+        gd[a] = vmeet(M->jd[a], d);
         ok &= (v4i)(gd[a].lo <= gd[a].hi);
     }
-    vi v1 = v_splat(c->v);
+    vi v1 = M->cv;
     for (int a = 0; a < 3; a++)
         v1 = v_add(v1, v_mul(gd[a], dx[a]));
-    vi gv = vmeet(v_splat(j->v), vmeet(v1, f));
+    vi gv = vmeet(M->jv, vmeet(v1, f));
     ok &= (v4i)(gv.lo <= gv.hi);
-    store_lanes(gv, &out->g[4 * q].v, sizeof(ism_ivgrad));
+    store_lanes(gv, &out->g[0].v, sizeof(ism_ivgrad));
     for (int a = 0; a < 3; a++)
-        store_lanes(gd[a], &out->g[4 * q].d[a], sizeof(ism_ivgrad));
-    for (int i = 0; i < 4; i++)
-        out->ok[4 * q + i] = ok[i] != 0;
+        store_lanes(gd[a], &out->g[0].d[a], sizeof(ism_ivgrad));
+    for (int j = 0; j < 4; j++)
+        out->ok[j] = ok[j] != 0;
+}
+
+/* Sub-box k = 4 q + j of a proof in group q, lane j: dxh[a][k >> a & 1] along a. */
+INLINE void sub_groups(const ism_dual_model *m, const ism_interval dxh[3][2], bool every,
+                       lane_out out[2])
+{
+    const ism_dual_model *const ms[4] = {m, m, m, m};
+    vmodel M;
+    gather_model(ms, &M);
+    for (int q = 0; q < 2; q++) {
+        vi dx[3];
+        for (int a = 0; a < 3; a++) {
+            const ism_interval *u[4];
+            for (int j = 0; j < 4; j++)
+                u[j] = &dxh[a][(4 * q + j) >> a & 1];
+            dx[a] = gather(u);
+        }
+        lanes_encl(&M, dx, every, &out[q]);
+    }
+}
+
+/* Boxes 4 q + j of n (the last repeated to fill a group): model m[k], x − c in dx[k]. */
+INLINE void many_groups(const ism_dual_model *m, const ism_interval (*dx)[3], size_t n,
+                        lane_out *out)
+{
+    for (size_t q = 0; 4 * q < n; q++) {
+        const ism_dual_model *ms[4];
+        const ism_interval *u[3][4];
+        for (size_t j = 0; j < 4; j++) {
+            size_t k = 4 * q + j < n ? 4 * q + j : n - 1;
+            ms[j] = &m[k];
+            for (int a = 0; a < 3; a++)
+                u[a][j] = &dx[k][a];
+        }
+        vmodel M;
+        gather_model(ms, &M);
+        vi vdx[3];
+        for (int a = 0; a < 3; a++)
+            vdx[a] = gather(u[a]);
+        lanes_encl(&M, vdx, true, &out[q]);
+    }
 }
 
 #if ISM_HAVE_AVX2_CLONE
-ISM_AVX2_CLONE static void encls_avx2(const ism_dual_model *m, const ism_interval dxh[3][2],
-                                      bool every, sub_encl *out)
+ISM_AVX2_CLONE static void sub_avx2(const ism_dual_model *m, const ism_interval dxh[3][2],
+                                    bool every, lane_out out[2])
 {
-    group_encl(m, dxh, 0, every, out);
-    group_encl(m, dxh, 1, every, out);
+    sub_groups(m, dxh, every, out);
+}
+ISM_AVX2_CLONE static void many_avx2(const ism_dual_model *m, const ism_interval (*dx)[3],
+                                     size_t n, lane_out *out)
+{
+    many_groups(m, dx, n, out);
 }
 #endif
 
-static void encls_base(const ism_dual_model *m, const ism_interval dxh[3][2], bool every,
-                       sub_encl *out)
+static void sub_base(const ism_dual_model *m, const ism_interval dxh[3][2], bool every,
+                     lane_out out[2])
 {
-    group_encl(m, dxh, 0, every, out);
-    group_encl(m, dxh, 1, every, out);
+    sub_groups(m, dxh, every, out);
+}
+static void many_base(const ism_dual_model *m, const ism_interval (*dx)[3], size_t n,
+                      lane_out *out)
+{
+    many_groups(m, dx, n, out);
 }
 
-/* sub_encl of m's sub-boxes; the enclosures of a group of four whose forms all keep f from
- * 0 only when every (g, ok undefined there otherwise). */
+/* lanes_encl on m's 8 sub-boxes: sub-box k in out[k >> 2], lane k & 3. */
 static void sub_encls(const ism_dual_model *m, const double lo[3], const double *mid,
-                      const double hi[3], bool every, sub_encl *out)
+                      const double hi[3], bool every, lane_out out[2])
 {
     ism_interval dxh[3][2];
     for (int a = 0; a < 3; a++) {
@@ -322,23 +391,46 @@ static void sub_encls(const ism_dual_model *m, const double lo[3], const double 
     }
 #if ISM_HAVE_AVX2_CLONE
     if (ISM_RUN_AVX2()) {
-        encls_avx2(m, (const ism_interval (*)[2])dxh, every, out);
+        sub_avx2(m, (const ism_interval (*)[2])dxh, every, out);
         return;
     }
 #endif
-    encls_base(m, (const ism_interval (*)[2])dxh, every, out);
+    sub_base(m, (const ism_interval (*)[2])dxh, every, out);
 }
 
 void ism_dual_sub_encls(const ism_dual_model *m, const double lo[3], const double *mid,
                         const double hi[3], ism_interval form[8], ism_ivgrad g[8], bool ok[8])
 {
-    sub_encl se;
-    sub_encls(m, lo, mid, hi, true, &se);
+    lane_out out[2];
+    sub_encls(m, lo, mid, hi, true, out);
     for (int k = 0; k < 8; k++) {
-        form[k] = se.form[k];
-        g[k] = se.g[k];
-        ok[k] = se.ok[k];
+        form[k] = out[k >> 2].form[k & 3];
+        g[k] = out[k >> 2].g[k & 3];
+        ok[k] = out[k >> 2].ok[k & 3];
     }
+}
+
+bool ism_dual_over_many(const ism_dual_model *m, const double (*lo)[3], const double (*hi)[3],
+                        size_t n, ism_interval *v2, ism_ivgrad *g, bool *ok)
+{
+    ism_interval dx[ISM_IVGRAD_BATCH][3];
+    lane_out out[ISM_IVGRAD_BATCH / 4];
+    if (n == 0 || n > ISM_IVGRAD_BATCH)
+        return false;
+    for (size_t k = 0; k < n; k++)
+        round_centre(&m[k], lo[k], hi[k], dx[k]);
+#if ISM_HAVE_AVX2_CLONE
+    if (ISM_RUN_AVX2())
+        many_avx2(m, (const ism_interval (*)[3])dx, n, out);
+    else
+#endif
+        many_base(m, (const ism_interval (*)[3])dx, n, out);
+    for (size_t k = 0; k < n; k++) {
+        v2[k] = out[k / 4].form[k % 4];
+        g[k] = out[k / 4].g[k % 4];
+        ok[k] = out[k / 4].ok[k % 4];
+    }
+    return true;
 }
 
 /* How nearly f's enclosure v (holding 0) is centred on 0: min(−lo, hi) / width, in [0, ½].
@@ -370,10 +462,11 @@ static int prove(const ism_tape *t, ism_ivjet_ws *jet, const ism_dual_model *m,
     int open[8], nopen = 0;
     double score[8];
     uint8_t shown = 0;
-    sub_encl se;
-    sub_encls(m, lo, mid, hi, false, &se);
+    lane_out se[2];
+    sub_encls(m, lo, mid, hi, false, se);
     for (int k = 0; k < 8; k++) {
-        v = verdict_from(se.form[k], se.ok[k], &se.g[k], d, &encl);
+        const lane_out *o = &se[k >> 2];
+        v = verdict_from(o->form[k & 3], o->ok[k & 3], &o->g[k & 3], d, &encl);
         if (v == FREE)
             shown |= (uint8_t)(1u << k);
         if (v < 0)

@@ -68,6 +68,13 @@ ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
 void ism_dual_sub_encls(const ism_dual_model *m, const double lo[3], const double *mid,
                         const double hi[3], ism_interval form[8], ism_ivgrad g[8], bool ok[8]);
 
+/* For each k < n (n <= ISM_IVGRAD_BATCH), on lo[k]..hi[k] by its model m[k], four boxes a
+ * step in lanes: v2[k] = ism_dual_second_order's bounds, ok[k] = ism_dual_over's answer and
+ * g[k] its enclosure (when ok), bit for bit. False, computing nothing, when n is out of
+ * range. For the models ism_dual_taylor_many made. */
+bool ism_dual_over_many(const ism_dual_model *m, const double (*lo)[3], const double (*hi)[3],
+                        size_t n, ism_interval *v2, ism_ivgrad *g, bool *ok);
+
 /* Both in one: f and ∇f over lo..hi by its own model. */
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                       const double hi[3], ism_ivgrad *g, uint64_t *intervals);

@@ -247,12 +247,32 @@ static bool take_model(worker *w, corner_view *v)
     return v->have_model;
 }
 
+/* The model's second-order form over the node (ism_dual_second_order), from
+ * ism_dual_pre_models' lanes when it took them. */
+static ism_interval node_form(const corner_view *v)
+{
+    return v->pre_forms ? v->pre_v2 : ism_dual_second_order(&v->model, v->p[0], v->p[7]);
+}
+
+/* The model's enclosure of the node into *g (ism_dual_over, or ism_dual_over_v2 with its
+ * form v2), from ism_dual_pre_models' lanes when it took them (used once: cleared). */
+static bool node_over(corner_view *v, const ism_interval *v2, ism_ivgrad *g)
+{
+    if (v->pre_forms) {
+        v->pre_forms = false;
+        *g = v->pre_over;
+        return v->pre_over_ok;
+    }
+    return v2 ? ism_dual_over_v2(&v->model, v->p[0], v->p[7], *v2, g)
+              : ism_dual_over(&v->model, v->p[0], v->p[7], g);
+}
+
 /* v->g (the node's natural enclosure) replaced by the Taylor model's (dual_cert.h), the
  * model kept in v; false when that cannot be had (g kept). */
 static bool tighten(worker *w, corner_view *v)
 {
     ism_ivgrad g;
-    if (!take_model(w, v) || !ism_dual_over(&v->model, v->p[0], v->p[7], &g))
+    if (!take_model(w, v) || !node_over(v, NULL, &g))
         return false;
     v->g = g;
     return true;
@@ -290,11 +310,11 @@ static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
      * the second-order form alone keeps f from 0, so does the enclosure's value (its meet
      * with two more forms), and its ∇f bounds are not needed; nothing reads v->g of an empty
      * node. Torus at 1e-2: ~200 of ~500 models. */
-    ism_interval v2 = ism_dual_second_order(&v->model, v->p[0], v->p[7]);
+    ism_interval v2 = node_form(v);
     if (v2.lo > 0 || v2.hi < 0)
         return true;
     ism_ivgrad g;
-    if (!ism_dual_over_v2(&v->model, v->p[0], v->p[7], v2, &g))
+    if (!node_over(v, &v2, &g))
         return false;
     v->g = g;
     if (!natural_open(n, v))
@@ -629,7 +649,7 @@ int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v)
 {
     int neg = 0;
     v->placed = FOOT_UNKNOWN;
-    v->pre_g = v->pre_model = false;
+    v->pre_g = v->pre_model = v->pre_forms = false;
     for (int c = 0; c < 8; c++) {
         if (!isfinite(n->f[c]) || !isfinite(v->n[c][0] + v->n[c][1] + v->n[c][2]))
             return DN_INNER;
@@ -693,11 +713,22 @@ void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const
         !ism_dual_taylor_many(w->s.tape, w->jet, (const double (*)[3])lo,
                               (const double (*)[3])hi, (size_t)np, m, ok))
         return;
+    /* the tails' first enclosures of these models, in lanes (the form alone decides for
+       some: taken anyway, a group of four lanes costing about one box's form and enclosure) */
+    ism_interval v2[ISM_IVGRAD_BATCH];
+    ism_ivgrad over[ISM_IVGRAD_BATCH];
+    bool over_ok[ISM_IVGRAD_BATCH];
+    bool forms = ism_dual_over_many(m, (const double (*)[3])lo, (const double (*)[3])hi,
+                                    (size_t)np, v2, over, over_ok);
     for (int k = 0; k < np; k++) {
         corner_view *v = &views[pick[k]];
         v->model = m[k];
         v->pre_ok = ok[k];
         v->pre_model = true;
+        v->pre_forms = forms && ok[k];
+        v->pre_v2 = v2[k];
+        v->pre_over = over[k];
+        v->pre_over_ok = over_ok[k];
     }
 }
 

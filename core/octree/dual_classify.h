@@ -41,6 +41,12 @@ typedef struct corner_view {
      * (ism_dual_pre_models), pre_ok its ism_dual_taylor answer, and the natural enclosure's
      * tests before it are known to fail (not taken again); classify_head clears it. */
     bool pre_model, pre_ok;
+    /* With pre_model: that model's second-order form over the box (pre_v2) and enclosure
+     * (pre_over, pre_over_ok: ism_dual_over's answer), taken in lanes with the other models'
+     * (ism_dual_over_many), for the first enclosure the tail takes; classify_head clears it. */
+    bool pre_forms, pre_over_ok;
+    ism_interval pre_v2;
+    ism_ivgrad pre_over;
 } corner_view;
 
 /* classify_head's answer when the corners leave the node to classify_tail. */

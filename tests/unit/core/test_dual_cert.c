@@ -534,7 +534,9 @@ Test(dual_cert, quad_form_of_a_turned_hessian)
  * a cell) in groups of 1 to 8, with and without a batch of natural enclosures over the same
  * boxes just before (kid_kinds's order: the jets then take that batch's records and compute
  * only the Hessian). A centre's gradient taken from the wrong lane, a record of another box,
- * or a centre rounded otherwise shows as a differing bound. */
+ * or a centre rounded otherwise shows as a differing bound. So do the models' forms and
+ * enclosures taken at once (ism_dual_over_many: groups of 4 lanes, the last box repeated to
+ * fill one) against ism_dual_second_order / ism_dual_over on each box. */
 Test(dual_cert, models_made_at_once_are_the_models_made_one_by_one)
 {
     ism_tape *t = pf_compile(&pf_ring_torus);
@@ -558,11 +560,24 @@ Test(dual_cert, models_made_at_once_are_the_models_made_one_by_one)
         bool ok[ISM_IVGRAD_BATCH];
         cr_assert(ism_dual_taylor_many(t, jw, (const double (*)[3])lo, (const double (*)[3])hi,
                                        n, m, ok));
+        ism_interval v2[ISM_IVGRAD_BATCH];
+        ism_ivgrad over[ISM_IVGRAD_BATCH];
+        bool over_ok[ISM_IVGRAD_BATCH];
+        cr_assert(ism_dual_over_many(m, (const double (*)[3])lo, (const double (*)[3])hi, n, v2,
+                                     over, over_ok));
         for (size_t k = 0; k < n; k++) {
             uint64_t count = 0;
             bool one = ism_dual_taylor(t, jw, lo[k], hi[k], &want, &count);
             cr_assert_eq(ok[k], one, "group %d, box %zu", group, k);
             cr_assert(memcmp(&m[k], &want, sizeof want) == 0, "group %d, box %zu", group, k);
+            /* their forms and enclosures in lanes: each the scalar one on its own box */
+            ism_interval f = ism_dual_second_order(&want, lo[k], hi[k]);
+            cr_assert(memcmp(&v2[k], &f, sizeof f) == 0, "group %d, box %zu: form", group, k);
+            ism_ivgrad g1;
+            bool ok1 = ism_dual_over(&want, lo[k], hi[k], &g1);
+            cr_assert_eq(over_ok[k], ok1, "group %d, box %zu", group, k);
+            cr_assert(!ok1 || memcmp(&over[k], &g1, sizeof g1) == 0, "group %d, box %zu: "
+                      "enclosure", group, k);
             models++;
         }
     }

@@ -1,7 +1,8 @@
 /* test_dual_pre.c — a split's children classified in two steps with their natural enclosures
  * and Taylor models made at once (dual.c kid_kinds: classify_head, ism_eval_interval_grad_batch,
  * ism_dual_pre_models, classify_tail) against each child alone (ism_dual_classify): the same
- * kind, the same have_model and, with it, the same model to the bit. The tail skips the tests
+ * kind, the same have_model and, with it, the same model to the bit, and the same enclosure
+ * left in the view (the models' enclosures at once: ism_dual_over_many). The tail skips the tests
  * ism_dual_pre_models saw fail (dual_classify.c natural_open); if the two ever chose
  * differently, a verdict or a model would differ here. The torus's nodes at levels 3-5 whose
  * box reaches the tube, in three placements (tests/unit/placements.h). */
@@ -128,6 +129,13 @@ static int compare_children(rig *r, const int32_t q[3], int level, int placement
         if (solo[c].have_model)
             cr_assert(!memcmp(&views[c].model, &solo[c].model, sizeof solo[c].model),
                       "placement %d, level %d node (%d %d %d) child %d: another model",
+                      placement, level, q[0], q[1], q[2], c);
+        /* the enclosure the tail left (natural, or the model's: taken in lanes with the
+           other models' at once, ism_dual_over_many) */
+        cr_assert_eq(views[c].have_g, solo[c].have_g);
+        if (kind[c] != DN_EMPTY && solo[c].have_g)
+            cr_assert(!memcmp(&views[c].g, &solo[c].g, sizeof solo[c].g),
+                      "placement %d, level %d node (%d %d %d) child %d: another enclosure",
                       placement, level, q[0], q[1], q[2], c);
     }
     return made;
