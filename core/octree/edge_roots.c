@@ -4,6 +4,7 @@
 #include "core/octree/edge_roots.h"
 
 #include <math.h>
+#include <string.h>
 
 #define FALSI_MAX_ITERS 60
 #define FALSI_TOLERANCE 1e-10 /* bracket width, as a fraction of the segment */
@@ -14,36 +15,130 @@ static void lerp(const double a[3], const double b[3], double t, double out[3])
         out[k] = a[k] + t * (b[k] - a[k]);
 }
 
+/* One regula falsi search's bracket: [t0, t1] with f0, f1 (Illinois-scaled) at its ends, the
+ * side the last step replaced and the steps taken. ism_regula_falsi runs one, and
+ * ism_regula_falsi_lanes many side by side, through the same four functions: each lane's
+ * iterates, and its root, are the single search's bit for bit. */
+typedef struct falsi {
+    double t0, f0, t1, f1;
+    int side, it;
+} falsi;
+
+static falsi falsi_start(double fa, double fb) { return (falsi){0, fa, 1, fb, 0, 0}; }
+
+static bool falsi_running(const falsi *q)
+{
+    return q->it < FALSI_MAX_ITERS && q->t1 - q->t0 > FALSI_TOLERANCE;
+}
+
+/* The next parameter to evaluate: the secant's, or the middle when it falls outside. */
+static double falsi_next(const falsi *q)
+{
+    double t = (q->t0 * q->f1 - q->t1 * q->f0) / (q->f1 - q->f0);
+    if (!(t > q->t0 && t < q->t1))
+        t = 0.5 * (q->t0 + q->t1);
+    return t;
+}
+
+/* Narrows the bracket by f(t) = ft (not 0). */
+static void falsi_take(falsi *q, double t, double ft)
+{
+    if ((ft < 0) == (q->f0 < 0)) {
+        q->t0 = t, q->f0 = ft;
+        if (q->side == -1)
+            q->f1 *= 0.5; /* Illinois: halve the stale end so the bracket keeps shrinking */
+        q->side = -1;
+    } else {
+        q->t1 = t, q->f1 = ft;
+        if (q->side == +1)
+            q->f0 *= 0.5;
+        q->side = +1;
+    }
+    q->it++;
+}
+
+/* The root once the bracket is narrow enough (or the steps ran out). */
+static double falsi_root(const falsi *q)
+{
+    double t = (q->t0 * q->f1 - q->t1 * q->f0) / (q->f1 - q->f0);
+    if (!(t >= q->t0 && t <= q->t1))
+        t = 0.5 * (q->t0 + q->t1);
+    return t;
+}
+
 double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], double fa,
                         double fb)
 {
-    double t0 = 0, f0 = fa, t1 = 1, f1 = fb;
-    int side = 0;
-    for (int it = 0; it < FALSI_MAX_ITERS && t1 - t0 > FALSI_TOLERANCE; it++) {
-        double t = (t0 * f1 - t1 * f0) / (f1 - f0);
-        if (!(t > t0 && t < t1))
-            t = 0.5 * (t0 + t1);
-        double p[3];
+    falsi q = falsi_start(fa, fb);
+    while (falsi_running(&q)) {
+        double t = falsi_next(&q), p[3];
         lerp(a, b, t, p);
         double ft = ism_sample_f(s, p);
         if (ft == 0)
             return t;
-        if ((ft < 0) == (f0 < 0)) {
-            t0 = t, f0 = ft;
-            if (side == -1)
-                f1 *= 0.5; /* Illinois: halve the stale end so the bracket keeps shrinking */
-            side = -1;
-        } else {
-            t1 = t, f1 = ft;
-            if (side == +1)
-                f0 *= 0.5;
-            side = +1;
-        }
+        falsi_take(&q, t, ft);
     }
-    double t = (t0 * f1 - t1 * f0) / (f1 - f0);
-    if (!(t >= t0 && t <= t1))
-        t = 0.5 * (t0 + t1);
-    return t;
+    return falsi_root(&q);
+}
+
+/* Searches stepped together by ism_regula_falsi_lanes: a step's points in one
+ * ism_eval_points call (instructions a point on the Klein bottle's tape: 410 one at a time,
+ * 161 / 139 at 16 / 32 points; eval.h). */
+#define FALSI_LANES 64
+
+void ism_regula_falsi_lanes(ism_sampler *s, const double (*a)[3], const double (*b)[3],
+                            const double *fa, const double *fb, double *t, size_t n)
+{
+    falsi q[FALSI_LANES];
+    /* lane j runs search lane[j] from o[j] along d[j] = b − a (lerp's point, bit for bit) */
+    double o[FALSI_LANES][3], d[FALSI_LANES][3];
+    size_t lane[FALSI_LANES], live = 0, next = 0;
+    for (;;) {
+        /* free lanes take the next searches (one whose bracket is narrow already ends) */
+        while (live < FALSI_LANES && next < n) {
+            size_t i = next++;
+            q[live] = falsi_start(fa[i], fb[i]);
+            if (!falsi_running(&q[live])) {
+                t[i] = falsi_root(&q[live]);
+                continue;
+            }
+            for (int k = 0; k < 3; k++) {
+                o[live][k] = a[i][k];
+                d[live][k] = b[i][k] - a[i][k];
+            }
+            lane[live++] = i;
+        }
+        if (!live)
+            return;
+        double tj[FALSI_LANES], x[FALSI_LANES], y[FALSI_LANES], z[FALSI_LANES],
+            fj[FALSI_LANES];
+        for (size_t j = 0; j < live; j++) {
+            double u = tj[j] = falsi_next(&q[j]);
+            x[j] = o[j][0] + u * d[j][0];
+            y[j] = o[j][1] + u * d[j][1];
+            z[j] = o[j][2] + u * d[j][2];
+        }
+        s->n_point += live;
+        ism_eval_points(s->tape, s->ws, x, y, z, fj, live);
+        size_t still = 0; /* a search that ended gives its lane up */
+        for (size_t j = 0; j < live; j++) {
+            size_t i = lane[j];
+            if (fj[j] == 0) {
+                t[i] = tj[j];
+                continue;
+            }
+            falsi_take(&q[j], tj[j], fj[j]);
+            if (!falsi_running(&q[j])) {
+                t[i] = falsi_root(&q[j]);
+                continue;
+            }
+            q[still] = q[j];
+            memcpy(o[still], o[j], sizeof o[0]);
+            memcpy(d[still], d[j], sizeof d[0]);
+            lane[still++] = i;
+        }
+        live = still;
+    }
 }
 
 /* Every this many halvings the double-root search asks one interval over what is left of

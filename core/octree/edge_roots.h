@@ -65,6 +65,13 @@ void ism_segment_roots(ism_sampler *s, const ism_root_params *prm, const double 
 double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], double fa,
                         double fb);
 
+/* ism_regula_falsi on n segments a[i]→b[i] (fa[i]·fb[i] < 0) into t[i], bit for bit each
+ * single search's root, the searches stepped side by side (f at a step's points in one
+ * batch: ism_eval_points, lane by lane ism_eval_point's value). s->local must be NULL: every
+ * point is evaluated on s->tape (the octree build's samplers). */
+void ism_regula_falsi_lanes(ism_sampler *s, const double (*a)[3], const double (*b)[3],
+                            const double *fa, const double *fb, double *t, size_t n);
+
 /* Can |f| come within eps of 0 on the segment a→b? False when the interval over its
  * bounding box proves |f| > eps everywhere on it (then no root and no tangent point). */
 bool ism_segment_may_reach(ism_sampler *s, const double a[3], const double b[3], double eps);

@@ -10,6 +10,7 @@
 #include "core/octree/edge_roots.h"
 #include "core/octree/face_memo.h"
 #include "core/octree/leaf_tapes.h"
+#include "core/octree/level_prefetch.h"
 #include "core/octree/node_balls.h"
 #include "core/octree/quiet.h"
 #include "core/octree/root_table.h"
@@ -225,6 +226,23 @@ static bool near_node(const build *b, const ism_node *nd)
     double lo[3], hi[3];
     node_box(b->grid, nd, lo, hi);
     return ism_node_balls_split(&b->node_balls, lo, hi);
+}
+
+/* Is fresh node nd split whatever its test says: a force_split key (its emitted triangles
+ * missed max_error last round) above depth.max, or in a node ball (near_node)? */
+static bool forced_split(const build *b, const ism_node *nd)
+{
+    return (nd->level < b->p->max_depth &&
+            ism_split_set_has(b->p->force_split, ism_node_key(nd))) ||
+           near_node(b, nd);
+}
+
+/* Child k of nd as a split appends it: undecided (a leaf until decided). */
+static ism_node child_node(const build *b, const ism_node *nd, int k)
+{
+    ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd->level + 1), ISM_NODE_LEAF, 0, 0};
+    ism_child_origin(b->grid, nd, k, c.org);
+    return c;
 }
 
 /* A search's verdict, with the counts ism_node.thin keeps (searches, undecided: searches
@@ -569,8 +587,7 @@ static void children_ranges(build *b, thread_state *th, const ism_node *nd,
 {
     ism_interval box[3][8];
     for (int k = 0; k < 8; k++) {
-        ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd->level + 1), ISM_NODE_LEAF, 0, 0};
-        ism_child_origin(b->grid, nd, k, c.org);
+        ism_node c = child_node(b, nd, k);
         double lo[3], hi[3];
         node_box(b->grid, &c, lo, hi);
         for (int a = 0; a < 3; a++)
@@ -754,6 +771,71 @@ static const ism_tape *resolve_tape(build *b, thread_state *th, tape_link *l)
     return l->tape;
 }
 
+/* The flatness test of a fresh node nd (no previous round's verdict; at depth.min or below,
+ * not forced) over tape sub, with the hidden-piece search and the resolve levels it may ask
+ * for: true when it is a leaf. Its corners: known (node_corners' values, prefetched), or
+ * NULL to read them here. Its flags and verdict go to *out, the level its children may be
+ * split down to to *limit_io. */
+static bool test_node(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
+                      const ism_corners *known, ism_node *out, int *limit_io)
+{
+    int limit = *limit_io;
+    bool leaf;
+    double lo[3], hi[3];
+    node_box(b->grid, nd, lo, hi);
+    ism_corners own;
+    if (!known)
+        node_corners(b->grid, th, b->p->tape, nd, &own);
+    const ism_corners *k = known ? known : &own;
+    const ism_tape *saved = th->s.tape;
+    th->s.tape = sub;
+    bool blind;
+    bool flat = ism_plot_test(&th->s, th->thin.jet, &b->p->flatness, lo, hi, k, &blind);
+    th->s.tape = saved;
+    bool kept = !flat && nd->level < limit && conformed(b, lo, hi);
+    leaf = flat || kept || nd->level >= limit;
+    /* a leaf proven free of f = 0 emits nothing and hides no piece: skipped from here */
+    if (leaf && !b->p->scalar_eval &&
+        ism_box_zero_free(sub, th->s.ws, th->thin.jet, lo, hi, k,
+                          b->p->flatness.double_root_eps, &th->s.n_interval))
+        out->flags |= ISM_NODE_ZERO_FREE;
+    else if (leaf && !kept && (!flat || blind)) {
+        /* A leaf that passed the test blind (ism_plot_test: under max_error, at most 4 E
+         * across, corners of one sign whose gradients disagree) is searched by Newton
+         * probes alone, not with the interval proofs. The horn cyclide at E = 0.016,
+         * depth 9 (callgrind, one thread): in the box moved by (0.37, −0.23, 0.41) of a
+         * cell 1,473M instructions with the horns lost, 4,648M searching such leaves in
+         * full, 2,776M probing them (both find the horns: χ 1); in its own box, where
+         * nothing more is found (the same mesh), 2,074M, 3,298M and 2,395M. A kept
+         * leaf (conformed) lies in a quiet ball, where hides_piece searches nothing. */
+        out->thin = hides_piece(b, th, nd, sub, k, flat);
+        count_thin(th, out->thin);
+    }
+    if (out->thin & ISM_NODE_THIN_FOUND) {
+        leaf = false;
+        /* below a piece found at a kink only the nodes that still hide it split: there
+         * every node on a crease fails the flatness test (cube minus ball r = 1.4, d5:
+         * 13,232 triangles with the resolve levels, 7,424 without; 5,456 losing the bars) */
+        if (!(out->thin & ISM_NODE_THIN_AT_KINK))
+            limit = resolve_limit(b, limit);
+    }
+    bool uf = leaf && !flat && unflat(b, sub, lo, hi); /* asked once per unflat leaf */
+    if (uf && !kept && nd->level >= limit && limit < resolve_limit(b, limit) &&
+        visible_feature(b, th, sub, k, lo, hi)) {
+        leaf = false; /* resolved as deep as a hidden piece would be */
+        limit = resolve_limit(b, limit);
+    }
+    if (leaf && !flat) {
+        out->flags |= ISM_NODE_UNRESOLVED | (kept ? ISM_NODE_CONFORMED : 0);
+        th->unresolved++;
+        if (uf)
+            out->flags |= ISM_NODE_UNFLAT;
+    }
+    th->deep_leaves += leaf && nd->level > b->p->max_depth;
+    *limit_io = limit;
+    return leaf;
+}
+
 /* Decides node v->v[i] and grows its subtree. Nodes that fail the flatness test are split
  * down to level `limit` (depth.max, or ISM_THIN_RESOLVE_LEVELS deeper below a hidden
  * piece or a visible feature about a cell across, visible_feature); a would-be leaf that
@@ -784,10 +866,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         return copy_subtree(b, th, v, i, pi);
     /* asked only where it decides: a node the last round left empty stays empty and one it
      * split is split again, forced or not (take_over) */
-    bool forced = (!pv || pv->state == ISM_NODE_LEAF) &&
-                  ((nd.level < b->p->max_depth &&
-                    ism_split_set_has(b->p->force_split, ism_node_key(&nd))) ||
-                   near_node(b, &nd));
+    bool forced = (!pv || pv->state == ISM_NODE_LEAF) && forced_split(b, &nd);
     if (pv && take_over(b, th, v, i, pi, forced))
         return true;
     bool was_split = pv && pv->state == ISM_NODE_SPLIT;
@@ -811,57 +890,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         if ((pv->thin & ISM_NODE_THIN_FOUND) && !(pv->thin & ISM_NODE_THIN_AT_KINK))
             limit = resolve_limit(b, limit); /* as below */
     }
-    if (!pv && nd.level >= b->p->min_depth && !forced) {
-        double lo[3], hi[3];
-        node_box(b->grid, &nd, lo, hi);
-        ism_corners k;
-        node_corners(b->grid, th, b->p->tape, &nd, &k);
-        const ism_tape *saved = th->s.tape;
-        th->s.tape = sub;
-        bool blind;
-        bool flat = ism_plot_test(&th->s, th->thin.jet, &b->p->flatness, lo, hi, &k, &blind);
-        th->s.tape = saved;
-        bool kept = !flat && nd.level < limit && conformed(b, lo, hi);
-        leaf = flat || kept || nd.level >= limit;
-        /* a leaf proven free of f = 0 emits nothing and hides no piece: skipped from here */
-        if (leaf && !b->p->scalar_eval &&
-            ism_box_zero_free(sub, th->s.ws, th->thin.jet, lo, hi, &k,
-                              b->p->flatness.double_root_eps, &th->s.n_interval))
-            v->v[i].flags |= ISM_NODE_ZERO_FREE;
-        else if (leaf && !kept && (!flat || blind)) {
-            /* A leaf that passed the test blind (ism_plot_test: under max_error, at most 4 E
-             * across, corners of one sign whose gradients disagree) is searched by Newton
-             * probes alone, not with the interval proofs. The horn cyclide at E = 0.016,
-             * depth 9 (callgrind, one thread): in the box moved by (0.37, −0.23, 0.41) of a
-             * cell 1,473M instructions with the horns lost, 4,648M searching such leaves in
-             * full, 2,776M probing them (both find the horns: χ 1); in its own box, where
-             * nothing more is found (the same mesh), 2,074M, 3,298M and 2,395M. A kept
-             * leaf (conformed) lies in a quiet ball, where hides_piece searches nothing. */
-            v->v[i].thin = hides_piece(b, th, &nd, sub, &k, flat);
-            count_thin(th, v->v[i].thin);
-        }
-        if (v->v[i].thin & ISM_NODE_THIN_FOUND) {
-            leaf = false;
-            /* below a piece found at a kink only the nodes that still hide it split: there
-             * every node on a crease fails the flatness test (cube minus ball r = 1.4, d5:
-             * 13,232 triangles with the resolve levels, 7,424 without; 5,456 losing the bars) */
-            if (!(v->v[i].thin & ISM_NODE_THIN_AT_KINK))
-                limit = resolve_limit(b, limit);
-        }
-        bool uf = leaf && !flat && unflat(b, sub, lo, hi); /* asked once per unflat leaf */
-        if (uf && !kept && nd.level >= limit && limit < resolve_limit(b, limit) &&
-            visible_feature(b, th, sub, &k, lo, hi)) {
-            leaf = false; /* resolved as deep as a hidden piece would be */
-            limit = resolve_limit(b, limit);
-        }
-        if (leaf && !flat) {
-            v->v[i].flags |= ISM_NODE_UNRESOLVED | (kept ? ISM_NODE_CONFORMED : 0);
-            th->unresolved++;
-            if (uf)
-                v->v[i].flags |= ISM_NODE_UNFLAT;
-        }
-        th->deep_leaves += leaf && nd.level > b->p->max_depth;
-    }
+    if (!pv && nd.level >= b->p->min_depth && !forced)
+        leaf = test_node(b, th, &nd, sub, NULL, &v->v[i], &limit);
     if (leaf) {
         v->v[i].state = ISM_NODE_LEAF;
         /* the tape its cell evaluates: sub, shortened over this box or an ancestor's */
@@ -875,8 +905,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     if (!vec_reserve(b, v, 8))
         return fail(b, ISM_BUILD_NO_MEMORY);
     for (int k = 0; k < 8; k++) {
-        ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd.level + 1), ISM_NODE_LEAF, 0, 0};
-        ism_child_origin(b->grid, &nd, k, c.org);
+        ism_node c = child_node(b, &nd, k);
         vec_put(v, &c, 0);
     }
     v->v[i].state = ISM_NODE_SPLIT;
@@ -895,6 +924,141 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     return true;
 }
 
+/* A task's subtree grown level by level (grow_levels): where each node's decision depends
+ * on nothing but the node, its range and its limit — a build that shortens no tape (every
+ * node evaluates f itself) and takes nothing over from a last round — the nodes of one level
+ * are decided together, so the pure values their tests read (corners, edge roots) are
+ * computed ahead in wide batches (level_prefetch.h), then laid out in grow's depth-first
+ * order (lay_out): the tree, every node's verdict and the counters but the evaluation counts
+ * are grow's (the memos end holding other entries, of the same pure values). Klein bottle at
+ * E 3.27e-3 (callgrind, one thread, ism_mesh_surface; main 5757910): 3,486.0M -> 3,447.0M,
+ * the roots' f 31 points a batch (was 1), the corners' 40 (was 1 to 27); the 87,166 tests
+ * themselves unchanged. Not yet for tapes that shorten (each node of a level would need its
+ * own shortened tape: gyroid-ball, Barth's sextic) nor for later rounds (take_over). */
+typedef struct level_node {
+    ism_node nd;        /* decided; a split node's child: its first child in the next level */
+    int limit;          /* the level its children may be split down to */
+    ism_interval range; /* f's interval over the node */
+    bool tested;        /* asks the flatness test */
+} level_node;
+
+typedef struct level_vec {
+    level_node *v;
+    size_t n, cap;
+} level_vec;
+
+/* Nodes of a level decided together: their corners and roots fit the memos (2^16 corner
+ * and 2^13 root entries a thread) with room to spare, and the batches are hundreds wide. */
+#define LEVEL_CHUNK 128
+
+/* Does grow_levels decide as grow would (see level_node)? */
+static bool levels_apply(const build *b, const thread_state *th)
+{
+    return !b->shortening && !b->previous && !b->p->scalar_eval && th->memo.roots;
+}
+
+/* Nodes [from, to) of level lv: ranges and force checks, the tested nodes' corners (into
+ * corners: room for LEVEL_CHUNK) and roots prefetched, then each decided as grow decides it
+ * (its children appended to next). */
+static bool decide_chunk(build *b, thread_state *th, level_vec *lv, size_t from, size_t to,
+                         level_vec *next, ism_corners *corners)
+{
+    const ism_node *tested[LEVEL_CHUNK];
+    bool have[LEVEL_CHUNK];
+    size_t nt = 0;
+    for (size_t j = from; j < to; j++) {
+        level_node *ln = &lv->v[j];
+        th->visited++;
+        bool forced = forced_split(b, &ln->nd);
+        if (!(ln->range.lo <= 0 && ln->range.hi >= 0)) {
+            ln->nd.state = ISM_NODE_EMPTY;
+            th->excluded++;
+            continue;
+        }
+        ln->tested = ln->nd.level >= b->p->min_depth && !forced;
+        if (ln->tested)
+            tested[nt++] = &ln->nd;
+    }
+    ism_prefetch_nodes(&th->memo, th->corners, ISM_CORNER_MEMO_BITS, b->grid, tested, nt,
+                       &th->s, corners, have);
+    for (size_t j = from, t = 0; j < to; j++) {
+        if (atomic_load(&b->failed) != ISM_BUILD_OK)
+            return false;
+        if (b->p->cancel && *b->p->cancel)
+            return fail(b, ISM_BUILD_CANCELLED);
+        level_node *ln = &lv->v[j];
+        if (ln->nd.state == ISM_NODE_EMPTY)
+            continue;
+        ism_node nd = ln->nd;
+        const ism_corners *known = ln->tested && have[t] ? &corners[t] : NULL;
+        t += ln->tested;
+        if (ln->tested && test_node(b, th, &nd, b->p->tape, known, &ln->nd, &ln->limit))
+            continue; /* a leaf (state LEAF already: no tape number, f itself) */
+        if ((th->new_nodes += 8) >= NODE_BATCH && !count_nodes(b, th))
+            return false;
+        if (!ism_grow((void **)&next->v, &next->cap, next->n + 8, sizeof *next->v, 256))
+            return fail(b, ISM_BUILD_NO_MEMORY);
+        ism_interval ranges[8];
+        children_ranges(b, th, &nd, b->p->tape, ranges);
+        ln->nd.state = ISM_NODE_SPLIT;
+        ln->nd.child = (int32_t)next->n;
+        for (int k = 0; k < 8; k++)
+            next->v[next->n++] =
+                (level_node){child_node(b, &nd, k), ln->limit, ranges[k], false};
+    }
+    return true;
+}
+
+/* Node j of level l laid out at v->v[i], its children appended and laid out in turn, as
+ * grow appends and grows them. */
+static bool lay_out(build *b, node_vec *v, size_t i, const level_vec *lv, int l, size_t j)
+{
+    const ism_node *nd = &lv[l].v[j].nd;
+    v->v[i] = *nd;
+    if (nd->state != ISM_NODE_SPLIT)
+        return true;
+    size_t first = v->n;
+    if (!vec_reserve(b, v, 8))
+        return fail(b, ISM_BUILD_NO_MEMORY);
+    for (int k = 0; k < 8; k++)
+        vec_put(v, &lv[l + 1].v[nd->child + k].nd, 0);
+    v->v[i].child = (int32_t)first;
+    for (int k = 0; k < 8; k++)
+        if (!lay_out(b, v, first + k, lv, l + 1, (size_t)nd->child + k))
+            return false;
+    return true;
+}
+
+/* The task's node v->v[0] and its subtree, decided level by level (levels_apply). */
+static bool grow_levels(build *b, thread_state *th, node_vec *v, int limit)
+{
+    level_vec lv[ISM_GRID_MAX_DEPTH + 2];
+    memset(lv, 0, sizeof lv);
+    int top = v->v[0].level, l = top;
+    bool ok = true;
+    ism_interval range;
+    node_range(b, th, &v->v[0], b->p->tape, &range);
+    lv[top].v = malloc(sizeof *lv[top].v);
+    ism_corners *k = malloc(LEVEL_CHUNK * sizeof *k); /* the chunk's tested nodes' */
+    if (!lv[top].v || !k) {
+        free(lv[top].v);
+        free(k);
+        return fail(b, ISM_BUILD_NO_MEMORY);
+    }
+    lv[top].v[0] = (level_node){v->v[0], limit, range, false};
+    lv[top].n = lv[top].cap = 1;
+    for (; ok && l <= ISM_GRID_MAX_DEPTH && lv[l].n; l++)
+        for (size_t from = 0; ok && from < lv[l].n; from += LEVEL_CHUNK) {
+            size_t to = lv[l].n - from < LEVEL_CHUNK ? lv[l].n : from + LEVEL_CHUNK;
+            ok = decide_chunk(b, th, &lv[l], from, to, &lv[l + 1], k);
+        }
+    ok = ok && lay_out(b, v, 0, lv, top, 0);
+    for (int j = top; j <= ISM_GRID_MAX_DEPTH + 1; j++)
+        free(lv[j].v);
+    free(k);
+    return ok;
+}
+
 static void report_progress(build *b)
 {
     if (!b->p->progress)
@@ -911,8 +1075,11 @@ static void run_task(void *ctx, size_t task, int thread)
     thread_state *th = &b->threads[thread];
     node_vec *out = &b->task_out[task];
     /* The task's tape: shorten from the full tape over the task's own box on the way. */
-    if (grow(b, th, out, 0, b->p->tape, NULL, b->tasks[task].limit, NULL,
-             b->tasks[task].previous, NULL))
+    bool ok = levels_apply(b, th)
+                  ? grow_levels(b, th, out, b->tasks[task].limit)
+                  : grow(b, th, out, 0, b->p->tape, NULL, b->tasks[task].limit, NULL,
+                         b->tasks[task].previous, NULL);
+    if (ok)
         count_nodes(b, th);
     report_progress(b);
 }

@@ -6,12 +6,16 @@
  * 25 halvings. The same f written out (x² − 2cx + c² − h: intervals wider by ~2c × the
  * bracket) gives the same answers, early too unless h is below what 25 halvings make the
  * interval see (h = −1e-8: all 25, the answer unchanged). Each in three placements: the
- * segment [0, 1], moved by 1e-3, and by (√2 − 1) / 2, c with it. */
+ * segment [0, 1], moved by 1e-3, and by (√2 − 1) / 2, c with it. The single-root search run
+ * in lanes (ism_regula_falsi_lanes: the octree build's level prefetch) against the search
+ * one segment at a time: the same root bits and the same evaluations counted, on every
+ * example surface, with more segments than lanes. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
 #include "core/octree/edge_roots.h"
 #include "poly_fixture.h"
+#include "test_eval_surfaces.h"
 
 #define ITERS 25     /* the default double_root_iters (tolerances.h) */
 #define EPS 1e-9     /* the default double_root_eps */
@@ -72,4 +76,74 @@ Test(edge_roots, double_root_search_against_closed_forms)
                                  shifts[k], folds[m], (unsigned long long)none.gradients);
             }
         }
+}
+
+/* Segments with ends of opposite sign (neither 0) in box b of s, ends at random points
+ * joined along one axis (node edges lie along axes) or across (any segment), up to max. */
+static size_t crossing_segments(const test_surface *s, ism_tape *t, ism_eval_ws *ws,
+                                test_rng *r, double (*a)[3], double (*b)[3], double *fa,
+                                double *fb, size_t max)
+{
+    size_t n = 0;
+    for (int tries = 0; tries < 200000 && n < max; tries++) {
+        for (int k = 0; k < 3; k++)
+            a[n][k] = test_uniform(r, s->box[k], s->box[k + 3]);
+        memcpy(b[n], a[n], sizeof b[n]);
+        int axis = tries % 4; /* 3: across */
+        double len = 0.2 * (s->box[3] - s->box[0]);
+        for (int k = 0; k < 3; k++)
+            if (axis == 3 || k == axis)
+                b[n][k] += test_uniform(r, 0.2, 1) * len;
+        fa[n] = ism_eval_point(t, ws, a[n][0], a[n][1], a[n][2]);
+        fb[n] = ism_eval_point(t, ws, b[n][0], b[n][1], b[n][2]);
+        if (fa[n] != 0 && fb[n] != 0 && (fa[n] < 0) != (fb[n] < 0) && isfinite(fa[n]) &&
+            isfinite(fb[n]))
+            n++;
+    }
+    return n;
+}
+
+#define LANE_SEGMENTS 150 /* more than the lanes run at once (64): lanes are reused */
+
+Test(edge_roots, lanes_give_each_search_root_bit_for_bit)
+{
+    static double a[LANE_SEGMENTS][3], b[LANE_SEGMENTS][3], fa[LANE_SEGMENTS],
+        fb[LANE_SEGMENTS], t[LANE_SEGMENTS];
+    size_t tested = 0, full = 0; /* surfaces with more segments than lanes */
+    for (size_t i = 0; i < TEST_NSURFACES; i++) {
+        const test_surface *s = &TEST_SURFACES[i];
+        ism_tape *tape = test_surface_compile(s);
+        ism_sampler one, lanes;
+        memset(&one, 0, sizeof one);
+        one.tape = tape;
+        one.ws = ism_eval_ws_new(tape);
+        lanes = one;
+        lanes.ws = ism_eval_ws_new(tape);
+        cr_assert(one.ws && lanes.ws);
+        test_rng r = {0x5eed + i};
+        size_t n = crossing_segments(s, tape, one.ws, &r, a, b, fa, fb, LANE_SEGMENTS);
+        for (size_t k = 0; k < 3; k++) { /* none, one segment, all of them */
+            size_t m = k == 0 ? 0 : k == 1 ? (n > 0) : n;
+            one.n_point = lanes.n_point = 0;
+            ism_regula_falsi_lanes(&lanes, (const double (*)[3])a, (const double (*)[3])b, fa,
+                                   fb, t, m);
+            for (size_t j = 0; j < m; j++) {
+                double want = ism_regula_falsi(&one, a[j], b[j], fa[j], fb[j]);
+                cr_expect(memcmp(&want, &t[j], sizeof want) == 0,
+                          "%s segment %zu of %zu: lanes %.17g, alone %.17g", s->name, j, m, t[j],
+                          want);
+                cr_expect(t[j] > 0 && t[j] < 1, "%s: root at %g", s->name, t[j]);
+            }
+            cr_expect_eq(lanes.n_point, one.n_point, "%s: %llu evaluations in lanes, %llu alone",
+                         s->name, (unsigned long long)lanes.n_point,
+                         (unsigned long long)one.n_point);
+        }
+        tested += n;
+        full += n == LANE_SEGMENTS;
+        ism_eval_ws_free(one.ws);
+        ism_eval_ws_free(lanes.ws);
+        ism_tape_free(tape);
+    }
+    cr_expect_gt(full, TEST_NSURFACES / 2, "only %zu of %zu surfaces gave %d segments (%zu in all)",
+                 full, TEST_NSURFACES, LANE_SEGMENTS, tested);
 }
