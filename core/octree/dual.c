@@ -80,24 +80,31 @@ static void set_grid(dual *d, const double box[6], int depth)
     d->finest_step = min_of(d->g.step[0], min_of(d->g.step[1], d->g.step[2]));
 }
 
-/* f and the unit gradients at the lattice points q[0..n) (n <= 27) into f, p, g (f 0 where
- * its sign is rounding noise: ism_sample_zero_by_rounding), through the point memo, as
+/* f and the unit gradients at the lattice points q[0..n) (n <= 27), at p (their coordinates,
+ * given), into f and g (f 0 where its sign is rounding noise: ism_sample_zero_by_rounding), through the point memo, as
  * neighbouring nodes share corners (a split's 27 points hold the parent's 8 and the 18 on
  * its faces and edges that the neighbours' splits sample too): ism_point_memo_many, the memo
  * as one point at a time leaves it, the misses' values in one batch. */
-static void sample_corners(dual *d, worker *w, const int32_t (*q)[3], size_t n, double *f,
-                           double (*p)[3], double (*g)[3])
+static void sample_points(dual *d, worker *w, const int32_t (*q)[3], size_t n, double *f,
+                          double (*p)[3], double (*g)[3])
 {
     uint64_t key[ISM_POINT_MEMO_MANY];
-    for (size_t j = 0; j < n; j++)
-        for (int a = 0; a < 3; a++)
-            p[j][a] = ism_grid_coord(&d->g, a, q[j][a]);
     ism_point_memo_many(w->points, w->bits, q, (const double (*)[3])p, n, &w->s, f, g, key);
     for (size_t j = 0; j < n; j++) {
         double gn = ism_normalise3(g[j]); /* 0 at a critical point: no agreement there */
         if (f[j] != 0 && ism_sample_zero_by_rounding(&w->s, p[j], f[j], gn, d->finest_step))
             f[j] = 0; /* a zero for every node sharing the point, as the primal tiles take it */
     }
+}
+
+/* sample_points at the lattice points q[0..n), their coordinates (ism_grid_coord) into p. */
+static void sample_corners(dual *d, worker *w, const int32_t (*q)[3], size_t n, double *f,
+                           double (*p)[3], double (*g)[3])
+{
+    for (size_t j = 0; j < n; j++)
+        for (int a = 0; a < 3; a++)
+            p[j][a] = ism_grid_coord(&d->g, a, q[j][a]);
+    sample_points(d, w, q, n, f, p, g);
 }
 
 /* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles). */
@@ -211,6 +218,13 @@ typedef struct split_out {
  * instructions a corner, 1% of the torus at 3e-3. */
 static const uint8_t SPLIT_OFF[8] = {0, 1, 3, 4, 9, 10, 12, 13};
 
+/* Bit j of CHILD_CORNERS[c]: point j of a split's 27 (corners_task's order, x fastest) is
+ * a corner of child c. */
+#define CORNER_BITS(o) (0x361Bu << (o)) /* points o + {0, 1, 3, 4, 9, 10, 12, 13} */
+static const uint32_t CHILD_CORNERS[8] = {CORNER_BITS(0), CORNER_BITS(1), CORNER_BITS(3),
+                                          CORNER_BITS(4), CORNER_BITS(9), CORNER_BITS(10),
+                                          CORNER_BITS(12), CORNER_BITS(13)};
+
 /* Are a split's children past min_depth, where batch_on's own judgement applies and the
  * batches are counted for it (expand), rather than above it, where they are always made? */
 static bool batch_judged(const dual *d, int parent_level)
@@ -218,8 +232,8 @@ static bool batch_judged(const dual *d, int parent_level)
     return parent_level + 1 >= d->o->min_depth;
 }
 
-/* Bit c: child c's box is free of f = 0 by the natural interval of f over it (the 27
- * points in split_task's order). One batch of eight boxes (ism_eval_interval_batch) costs
+/* Bit c: child c's box is free of f = 0 by the natural interval of f over it (p: the 27
+ * points in corners_task's order; neg27 bit j: f < 0 at point j). One batch of eight boxes (ism_eval_interval_batch) costs
  * less than one box's interval alone — callgrind, per call: torus 912 instructions for the
  * batch, 644 for one value, 1,947 for one value with ∇f; kummer's quartic 1,602 / 1,286 /
  * 4,330 — and the proofs of a child whose corners share a sign began with f and ∇f's
@@ -236,8 +250,8 @@ static bool batch_judged(const dual *d, int parent_level)
  * --toggle-collect=ism_polygonise, batches above depth.min always against gated by batch_on
  * past it alone: torus 0.0141 74.3M against 108.7M, kummer-16-nodes 1e-2 1,127.8M against
  * 1,169.5M, the same meshes. *batched tells whether one was made. */
-static uint8_t children_free(const dual *d, worker *w, const dnode *parent,
-                             const double f[27], const double (*p)[3], bool *batched)
+static uint8_t children_free(const dual *d, worker *w, const dnode *parent, uint32_t neg27,
+                             const double (*p)[3], bool *batched)
 {
     *batched = false;
     if (!d->batch_on && batch_judged(d, parent->level))
@@ -245,9 +259,7 @@ static uint8_t children_free(const dual *d, worker *w, const dnode *parent,
     bool any = false;
     ism_interval x[8], y[8], z[8], out[8];
     for (int c = 0; c < 8; c++) {
-        int lo = SPLIT_OFF[c], neg = 0;
-        for (int j = 0; j < 8; j++)
-            neg += f[lo + SPLIT_OFF[j]] < 0;
+        int lo = SPLIT_OFF[c], neg = __builtin_popcount(neg27 & CHILD_CORNERS[c]);
         any |= neg == 0 || neg == 8;
         x[c] = (ism_interval){p[lo][0], p[lo + 13][0]};
         y[c] = (ism_interval){p[lo][1], p[lo + 13][1]};
@@ -264,26 +276,18 @@ static uint8_t children_free(const dual *d, worker *w, const dnode *parent,
     return free_bits;
 }
 
-/* Bit j of CHILD_CORNERS[c]: point j of a split's 27 (corners_task's order, x fastest) is
- * a corner of child c. */
-#define CORNER_BITS(o) (0x361Bu << (o)) /* points o + {0, 1, 3, 4, 9, 10, 12, 13} */
-static const uint32_t CHILD_CORNERS[8] = {CORNER_BITS(0), CORNER_BITS(1), CORNER_BITS(3),
-                                          CORNER_BITS(4), CORNER_BITS(9), CORNER_BITS(10),
-                                          CORNER_BITS(12), CORNER_BITS(13)};
-
-/* Bit c: sag_split will ask for child c's centre foot (f and p at the 27 points): corners
- * of both signs, finite, under the straddle move, between min_depth and depth.max, inside
- * the request's box. A child that asks for none after all (classify's earlier answers) only
- * costs its lane. */
-static uint8_t wanted_feet(const dual *d, int level, const double f[27], const double (*p)[3])
+/* Bit c: sag_split will ask for child c's centre foot (f and p at the 27 points, neg bit
+ * j: f < 0 at point j): corners of both signs, finite, under the straddle move, between
+ * min_depth and depth.max, inside the request's box. A child that asks for none after all
+ * (classify's earlier answers) only costs its lane. */
+static uint8_t wanted_feet(const dual *d, int level, const double f[27], uint32_t neg,
+                          const double (*p)[3])
 {
     if (!sag_may_split_any(d) || level >= d->o->max_depth || level < d->o->min_depth)
         return 0;
-    uint32_t neg = 0, finite = 0;
-    for (int j = 0; j < 27; j++) {
-        neg |= (uint32_t)(f[j] < 0) << j;
+    uint32_t finite = 0;
+    for (int j = 0; j < 27; j++)
         finite |= (uint32_t)(isfinite(f[j]) != 0) << j;
-    }
     uint8_t want = 0;
     for (int c = 0; c < 8; c++) {
         uint32_t m = CHILD_CORNERS[c], first = (uint32_t)__builtin_ctz(m);
@@ -335,17 +339,29 @@ static void corners_task(void *ctx, size_t k, int thread)
     split_in *in = &job->in[k];
     split_out *out = &job->out[k];
     int32_t half = ism_grid_cell_steps(&d->g, parent->level + 1);
-    int32_t q[27][3];
-    for (int j = 0; j < 27; j++) {
-        q[j][0] = parent->o.v[0] + j % 3 * half;
-        q[j][1] = parent->o.v[1] + j / 3 % 3 * half;
-        q[j][2] = parent->o.v[2] + j / 9 * half;
-    }
-    sample_corners(d, w, (const int32_t (*)[3])q, 27, in->f, in->p, in->g);
-    in->known = parent->free_kids |
-                children_free(d, w, parent, in->f, (const double (*)[3])in->p, &out->batched);
+    int32_t q[27][3], at[3][3]; /* at[a][i]: the lattice index i halves along axis a */
+    double x[3][3];             /* ... and its coordinate: 9 ism_grid_coord, not 81 */
+    for (int a = 0; a < 3; a++)
+        for (int i = 0; i < 3; i++) {
+            at[a][i] = parent->o.v[a] + i * half;
+            x[a][i] = ism_grid_coord(&d->g, a, at[a][i]);
+        }
+    for (int j = 0, k = 0; k < 3; k++) /* x fastest, as SPLIT_OFF reads them */
+        for (int i = 0; i < 3; i++)
+            for (int h = 0; h < 3; h++, j++) {
+                int32_t qj[3] = {at[0][h], at[1][i], at[2][k]};
+                double pj[3] = {x[0][h], x[1][i], x[2][k]};
+                memcpy(q[j], qj, sizeof qj);
+                memcpy(in->p[j], pj, sizeof pj);
+            }
+    sample_points(d, w, (const int32_t (*)[3])q, 27, in->f, in->p, in->g);
+    uint32_t neg = 0; /* bit j: f < 0 at point j */
+    for (int j = 0; j < 27; j++)
+        neg |= (uint32_t)(in->f[j] < 0) << j;
+    in->known = parent->free_kids | children_free(d, w, parent, neg,
+                                                  (const double (*)[3])in->p, &out->batched);
     out->batch_free = (uint8_t)(in->known & ~parent->free_kids);
-    in->wants = wanted_feet(d, parent->level + 1, in->f, (const double (*)[3])in->p);
+    in->wants = wanted_feet(d, parent->level + 1, in->f, neg, (const double (*)[3])in->p);
     memset(in->foot, FOOT_UNKNOWN, sizeof in->foot);
 }
 
@@ -480,6 +496,7 @@ static void split_task(void *ctx, size_t k, int thread)
         for (int a = 0; a < 3; a++)
             n->o.v[a] += ((c >> a) & 1) * half;
         n->level = (uint8_t)(parent->level + 1);
+#pragma GCC unroll 8 /* constant offsets: 64 corners a split, ~40% of split_task's own */
         for (int j = 0; j < 8; j++) {
             int at = SPLIT_OFF[c] + SPLIT_OFF[j];
             n->f[j] = f[at];
