@@ -68,7 +68,8 @@ typedef struct quads {
  * round's triangles); run frees it once the rounds end. */
 typedef struct walk_memo {
     struct walk_call *calls;
-    quads *parts;
+    uint32_t *q;  /* the calls' quads, 4 vertices each, call by call */
+    size_t *at;   /* call k's first quad in q (n + 1 entries) */
     size_t n;
     size_t nodes; /* the tree's nodes then (nodes are only ever added) */
 } walk_memo;
