@@ -690,6 +690,29 @@ static bool margin_vertices_outside(const dual *d)
     return true;
 }
 
+/* The mean of node n's (box lo..hi: its corners 0 and 7, corner_point's) crossed edges'
+ * secant roots into m; its centre when no edge is crossed (a small crease-side leaf not
+ * shown empty, dual_crease.h). */
+static void roots_mean(const dual *d, const dnode *n, const double lo[3], const double hi[3],
+                       double m[3])
+{
+    int roots = 0;
+    memset(m, 0, 3 * sizeof *m);
+    for (int e = 0; e < 12; e++) {
+        int c0 = d->ec0[e], c1 = d->ec1[e];
+        if ((n->f[c0] < 0) == (n->f[c1] < 0))
+            continue;
+        double t = n->f[c0] / (n->f[c0] - n->f[c1]); /* the secant root */
+        for (int a = 0; a < 3; a++) { /* corner c's coordinate a: lo's or hi's (corner_point) */
+            double p0 = c0 >> a & 1 ? hi[a] : lo[a], p1 = c1 >> a & 1 ? hi[a] : lo[a];
+            m[a] += p0 + t * (p1 - p0);
+        }
+        roots++;
+    }
+    for (int a = 0; a < 3; a++)
+        m[a] = roots ? m[a] / roots : 0.5 * lo[a] + 0.5 * hi[a];
+}
+
 /* Leaf i's vertex into pos[3 vert]: its centre moved onto f = 0 by Newton when that lands in
  * the leaf's closed box, else the mean of its edges' secant roots so moved (the exact roots
  * would cost a fifth of the whole mesh for a start point Newton forgets); then along ∇f by
@@ -725,23 +748,7 @@ static void place_vertex(dual *d, worker *w, int32_t i)
         return;
     }
     if (n->placed == FOOT_OUT || !ism_dual_foot_in_node(w, lo, hi, size, m)) {
-        int roots = 0;
-        memset(m, 0, sizeof m);
-        for (int e = 0; e < 12; e++) {
-            int c0 = d->ec0[e], c1 = d->ec1[e];
-            if ((n->f[c0] < 0) == (n->f[c1] < 0))
-                continue;
-            double p0[3], p1[3];
-            corner_point(d, n, c0, p0);
-            corner_point(d, n, c1, p1);
-            double t = n->f[c0] / (n->f[c0] - n->f[c1]); /* the secant root */
-            for (int a = 0; a < 3; a++)
-                m[a] += p0[a] + t * (p1[a] - p0[a]);
-            roots++;
-        }
-        for (int a = 0; a < 3; a++) /* no crossed edge (a small crease-side leaf not shown
-                                        empty, dual_crease.h): from the centre again */
-            m[a] = roots ? m[a] / roots : 0.5 * lo[a] + 0.5 * hi[a];
+        roots_mean(d, n, lo, hi, m);
         ism_dual_newton_onto(w, m, size);
     }
     double q[3];
@@ -754,6 +761,91 @@ static void vertex_task(void *ctx, size_t k, int thread)
 {
     task_ctx *job = ctx;
     place_vertex(job->d, &job->d->w[thread], ((const int32_t *)job->in)[k]);
+}
+
+/* Is leaf n's vertex one place_lanes makes (a plain leaf's that sag_split did not make)? */
+static bool placed_in_lanes(const dnode *n)
+{
+    return n->kind == DN_SURF && n->placed != FOOT_AT;
+}
+
+/* Task k (job: in the leaves, all placed_in_lanes; n how many): place_vertex for leaves
+ * in[MEASURE_LANES k ..], each step in lanes and bit for bit its own: the centres' feet not
+ * taken yet (ism_dual_feet_in_nodes), then Newton from the secant roots' mean for those whose
+ * foot left the leaf (ism_dual_feet_in_nodes again, each box the one point, its centre: the
+ * same steps as ism_dual_newton_onto's, the box's verdict unread), then f's jets at the
+ * points in one batch for the straddle move (ism_eval_hessian_batch, as feet_task's). One by
+ * one, Newton's gradients and the Hessian cost ~1,040 instructions each a leaf (sphere at
+ * 0.00714: 120 leaves whose foot left them). */
+static void place_lanes(void *ctx, size_t k, int thread)
+{
+    task_ctx *job = ctx;
+    dual *d = job->d;
+    worker *w = &d->w[thread];
+    const int32_t *leaf = job->in;
+    size_t first, n = chunk_of(k, job->n, &first);
+    double lo[MEASURE_LANES][3], hi[MEASURE_LANES][3], size[MEASURE_LANES], m[MEASURE_LANES][3];
+    double a[MEASURE_LANES][3], b[MEASURE_LANES][3], sz[MEASURE_LANES];
+    uint8_t state[MEASURE_LANES], st[MEASURE_LANES];
+    size_t at[MEASURE_LANES], na = 0;
+    for (size_t j = 0; j < n; j++) {
+        const dnode *nd = &d->n[leaf[first + j]];
+        corner_point(d, nd, 0, lo[j]);
+        corner_point(d, nd, 7, hi[j]);
+        size[j] = ism_grid_cell_size(&d->g, nd->level);
+        state[j] = FOOT_OUT;
+        if (nd->placed != FOOT_OUT) {
+            memcpy(a[na], lo[j], sizeof a[na]);
+            memcpy(b[na], hi[j], sizeof b[na]);
+            sz[na] = size[j];
+            at[na++] = j;
+        }
+    }
+    if (na) {
+        double foot[MEASURE_LANES][3];
+        ism_dual_feet_in_nodes(w, (const double (*)[3])a, (const double (*)[3])b, sz, na, foot,
+                               st);
+        for (size_t i = 0; i < na; i++) {
+            state[at[i]] = st[i];
+            memcpy(m[at[i]], foot[i], sizeof m[0]);
+        }
+    }
+    na = 0;
+    for (size_t j = 0; j < n; j++) {
+        if (state[j] == FOOT_AT)
+            continue;
+        roots_mean(d, &d->n[leaf[first + j]], lo[j], hi[j], m[j]);
+        bool centre = true; /* the one point's box has it as its centre (not so when subnormal) */
+        for (int c = 0; c < 3; c++)
+            centre &= 0.5 * m[j][c] + 0.5 * m[j][c] == m[j][c];
+        if (!centre) {
+            ism_dual_newton_onto(w, m[j], size[j]);
+            continue;
+        }
+        memcpy(a[na], m[j], sizeof a[na]);
+        sz[na] = size[j];
+        at[na++] = j;
+    }
+    if (na) {
+        double foot[MEASURE_LANES][3];
+        ism_dual_feet_in_nodes(w, (const double (*)[3])a, (const double (*)[3])a, sz, na, foot,
+                               st);
+        for (size_t i = 0; i < na; i++)
+            memcpy(m[at[i]], foot[i], sizeof m[0]);
+    }
+    if (d->shift > 0) {
+        double f[MEASURE_LANES], g[MEASURE_LANES][3], h[MEASURE_LANES][6];
+        ism_eval_hessian_batch(w->s.tape, w->s.ws, (const double (*)[3])m, f, g, h, n);
+        for (size_t j = 0; j < n; j++) {
+            ism_straddle_jet jet = {f[j], {g[j][0], g[j][1], g[j][2]},
+                                    {h[j][0], h[j][1], h[j][2], h[j][3], h[j][4], h[j][5]}};
+            double q[3];
+            if (ism_straddle_balanced_point_at(&w->s, d->shift, d->o->box, m[j], &jet, q, NULL))
+                memcpy(m[j], q, sizeof q);
+        }
+    }
+    for (size_t j = 0; j < n; j++)
+        memcpy(&d->pos[3 * (size_t)d->n[leaf[first + j]].vert], m[j], sizeof m[j]);
 }
 
 /* Room for n more vertices (positions and leaves); false when out of memory. */
@@ -826,18 +918,22 @@ static void make_vertices(dual *d)
         d->nomem = true;
         return;
     }
-    n = 0;
-    for (size_t i = 0; i < d->nn; i++)
+    size_t nl = 0; /* leaves[0..nl): placed in lanes; leaves[n..): one by one, from the end */
+    for (size_t i = 0, top = n; i < d->nn; i++)
         if (d->n[i].child < 0 && has_sheet(d->n[i].kind) && d->n[i].vert < 0) {
             for (int k = 0; k <= (d->n[i].kind == DN_PAIR); k++) {
                 *(k ? &d->n[i].vert2 : &d->n[i].vert) = (int32_t)d->nv;
                 d->vtwin[d->nv] = -1;
                 d->vleaf[d->nv++] = (int32_t)i;
             }
-            leaves[n++] = (int32_t)i;
+            if (placed_in_lanes(&d->n[i]))
+                leaves[nl++] = (int32_t)i;
+            else
+                leaves[--top] = (int32_t)i;
         }
-    task_ctx job = {d, leaves, NULL, 0};
-    ism_pool_for(d->pool, n, vertex_task, &job, NULL);
+    task_ctx lanes = {d, leaves, NULL, nl}, one = {d, leaves + nl, NULL, 0};
+    ism_pool_for(d->pool, chunks(nl), place_lanes, &lanes, NULL);
+    ism_pool_for(d->pool, n - nl, vertex_task, &one, NULL);
     free(leaves);
     if (d->crease && n)
         weld_crease(d, nv0);

@@ -238,6 +238,12 @@ void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t
     }
     task_ctx job = {d, cen, cmiss, nc};
     ism_pool_for(d->pool, chunks(nc), centroid_task, &job, NULL);
+    size_t pass = 0;
+    for (size_t k = 0, c = 0; k < np; k++)
+        pass += !emiss[k] && !cmiss[c++] && tkey[k];
+    if (pass) /* one growth, not one a doubling (out of memory: keyed_put grows, or keeps
+                 nothing) */
+        keyed_reserve(&d->passed, pass);
     for (size_t k = 0, c = 0; k < np; k++) {
         int m = emiss[k] ? emiss[k] : cmiss[c++];
         miss[at[k]] = (uint8_t)m;
