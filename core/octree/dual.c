@@ -769,6 +769,24 @@ static bool placed_in_lanes(const dnode *n)
     return n->kind == DN_SURF && n->placed != FOOT_AT;
 }
 
+/* ism_dual_feet_in_nodes of the na boxes lo[i]..hi[i] (side size[i]) into m[at[i]] and, state
+ * not NULL, state[at[i]]. */
+static void lane_feet(worker *w, const double (*lo)[3], const double (*hi)[3],
+                      const double *size, const size_t *at, size_t na, double (*m)[3],
+                      uint8_t *state)
+{
+    double foot[MEASURE_LANES][3];
+    uint8_t st[MEASURE_LANES];
+    if (!na)
+        return;
+    ism_dual_feet_in_nodes(w, lo, hi, size, na, foot, st);
+    for (size_t i = 0; i < na; i++) {
+        memcpy(m[at[i]], foot[i], sizeof foot[i]);
+        if (state)
+            state[at[i]] = st[i];
+    }
+}
+
 /* Task k (job: in the leaves, all placed_in_lanes; n how many): place_vertex for leaves
  * in[MEASURE_LANES k ..], each step in lanes and bit for bit its own: the centres' feet not
  * taken yet (ism_dual_feet_in_nodes), then Newton from the secant roots' mean for those whose
@@ -786,7 +804,7 @@ static void place_lanes(void *ctx, size_t k, int thread)
     size_t first, n = chunk_of(k, job->n, &first);
     double lo[MEASURE_LANES][3], hi[MEASURE_LANES][3], size[MEASURE_LANES], m[MEASURE_LANES][3];
     double a[MEASURE_LANES][3], b[MEASURE_LANES][3], sz[MEASURE_LANES];
-    uint8_t state[MEASURE_LANES], st[MEASURE_LANES];
+    uint8_t state[MEASURE_LANES];
     size_t at[MEASURE_LANES], na = 0;
     for (size_t j = 0; j < n; j++) {
         const dnode *nd = &d->n[leaf[first + j]];
@@ -801,15 +819,7 @@ static void place_lanes(void *ctx, size_t k, int thread)
             at[na++] = j;
         }
     }
-    if (na) {
-        double foot[MEASURE_LANES][3];
-        ism_dual_feet_in_nodes(w, (const double (*)[3])a, (const double (*)[3])b, sz, na, foot,
-                               st);
-        for (size_t i = 0; i < na; i++) {
-            state[at[i]] = st[i];
-            memcpy(m[at[i]], foot[i], sizeof m[0]);
-        }
-    }
+    lane_feet(w, (const double (*)[3])a, (const double (*)[3])b, sz, at, na, m, state);
     na = 0;
     for (size_t j = 0; j < n; j++) {
         if (state[j] == FOOT_AT)
@@ -826,13 +836,7 @@ static void place_lanes(void *ctx, size_t k, int thread)
         sz[na] = size[j];
         at[na++] = j;
     }
-    if (na) {
-        double foot[MEASURE_LANES][3];
-        ism_dual_feet_in_nodes(w, (const double (*)[3])a, (const double (*)[3])a, sz, na, foot,
-                               st);
-        for (size_t i = 0; i < na; i++)
-            memcpy(m[at[i]], foot[i], sizeof m[0]);
-    }
+    lane_feet(w, (const double (*)[3])a, (const double (*)[3])a, sz, at, na, m, NULL);
     if (d->shift > 0) {
         double f[MEASURE_LANES], g[MEASURE_LANES][3], h[MEASURE_LANES][6];
         ism_eval_hessian_batch(w->s.tape, w->s.ws, (const double (*)[3])m, f, g, h, n);
