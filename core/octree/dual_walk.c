@@ -19,8 +19,15 @@
 static const int AROUND_U[4] = {0, 1, 1, 0};
 static const int AROUND_V[4] = {0, 0, 1, 1};
 
-/* The child index of the octant at bits (0: low half, 1: high, per axis). */
-static inline int child_at(const int bits[3]) { return bits[0] | bits[1] << 1 | bits[2] << 2; }
+/* The axis after axis a (mod 3): a table, not a % (the walk's children are read by it). */
+static const int NEXT_AXIS[3] = {1, 2, 0};
+
+/* The child index of the octant whose bit along axis e is h, along the next axis u, along
+ * the one after v (0: low half, 1: high). */
+static inline int child_at(int e, int h, int u, int v)
+{
+    return h << e | u << NEXT_AXIS[e] | v << NEXT_AXIS[NEXT_AXIS[e]];
+}
 
 /* A call of the tree walk put off to run on the pool: a cell (c[0]), a face (c[0] below
  * c[1] across axis) or an edge (c[0..4) round an edge along axis). */
@@ -108,13 +115,7 @@ static void edge_quad(walk *wk, const int32_t c[4], int e)
         if (d->n[c[k]].level > d->n[c[deepest]].level)
             deepest = k;
     const dnode *n = &d->n[c[deepest]];
-    int bits[3];
-    bits[e] = 0;
-    bits[(e + 1) % 3] = 1 - AROUND_U[deepest];
-    bits[(e + 2) % 3] = 1 - AROUND_V[deepest];
-    int c0 = child_at(bits);
-    bits[e] = 1;
-    int c1 = child_at(bits);
+    int c0 = child_at(e, 0, 1 - AROUND_U[deepest], 1 - AROUND_V[deepest]), c1 = c0 | 1 << e;
     bool in0 = n->f[c0] < 0, in1 = n->f[c1] < 0;
     if (in0 == in1)
         return;
@@ -142,10 +143,10 @@ static void edge_quad(walk *wk, const int32_t c[4], int e)
 
 static bool is_leaf(const dual *d, int32_t i) { return d->n[i].child < 0; }
 
-/* Node i itself when a leaf, else its child at bits. */
-static int32_t sub(const dual *d, int32_t i, const int bits[3])
+/* Node i itself when a leaf, else its child c. */
+static int32_t sub(const dual *d, int32_t i, int c)
 {
-    return is_leaf(d, i) ? i : d->n[i].child + child_at(bits);
+    return is_leaf(d, i) ? i : d->n[i].child + c;
 }
 
 static void edge_down(walk *wk, const int32_t c[4], int e);
@@ -173,13 +174,8 @@ static void edge_down(walk *wk, const int32_t c[4], int e)
         return;
     for (int h = 0; h < 2; h++) {
         int32_t nc[4];
-        for (int k = 0; k < 4; k++) {
-            int bits[3];
-            bits[e] = h;
-            bits[(e + 1) % 3] = 1 - AROUND_U[k];
-            bits[(e + 2) % 3] = 1 - AROUND_V[k];
-            nc[k] = sub(d, c[k], bits);
-        }
+        for (int k = 0; k < 4; k++)
+            nc[k] = sub(d, c[k], child_at(e, h, 1 - AROUND_U[k], 1 - AROUND_V[k]));
         edge_proc(wk, nc, e);
     }
 }
@@ -203,25 +199,18 @@ static void face_down(walk *wk, int32_t c0, int32_t c1, int a)
     if (put_off(wk, WALK_FACE, a, pair, 2))
         return;
     for (int q = 0; q < 4; q++) {
-        int b0[3], b1[3];
-        b0[a] = 1;
-        b1[a] = 0;
-        b0[(a + 1) % 3] = b1[(a + 1) % 3] = q & 1;
-        b0[(a + 2) % 3] = b1[(a + 2) % 3] = q >> 1;
-        face_proc(wk, sub(d, c0, b0), sub(d, c1, b1), a);
+        int lo = child_at(a, 0, q & 1, q >> 1);
+        face_proc(wk, sub(d, c0, lo | 1 << a), sub(d, c1, lo), a);
     }
     for (int j = 1; j < 3; j++) {
-        int e = (a + j) % 3, t = 3 - a - e; /* the edge's axis and the face's other axis */
+        int e = j == 1 ? NEXT_AXIS[a] : NEXT_AXIS[NEXT_AXIS[a]], t = 3 - a - e; /* the edge's
+                                                       axis and the face's other axis */
         for (int h = 0; h < 2; h++) {
             int32_t nc[4];
             for (int k = 0; k < 4; k++) {
                 int ou = AROUND_U[k], ov = AROUND_V[k];
-                int oa = (e + 1) % 3 == a ? ou : ov, ot = (e + 1) % 3 == a ? ov : ou;
-                int bits[3];
-                bits[e] = h;
-                bits[a] = 1 - oa;
-                bits[t] = ot;
-                nc[k] = sub(d, oa ? c1 : c0, bits);
+                int oa = NEXT_AXIS[e] == a ? ou : ov, ot = NEXT_AXIS[e] == a ? ov : ou;
+                nc[k] = sub(d, oa ? c1 : c0, h << e | (1 - oa) << a | ot << t);
             }
             edge_proc(wk, nc, e);
         }
@@ -247,24 +236,14 @@ static void cell_down(walk *wk, int32_t i)
         cell_proc(wk, first + c);
     for (int a = 0; a < 3; a++)
         for (int q = 0; q < 4; q++) {
-            int b[3];
-            b[(a + 1) % 3] = q & 1;
-            b[(a + 2) % 3] = q >> 1;
-            b[a] = 0;
-            int32_t lo = first + child_at(b);
-            b[a] = 1;
-            face_proc(wk, lo, first + child_at(b), a);
+            int32_t lo = first + child_at(a, 0, q & 1, q >> 1);
+            face_proc(wk, lo, lo + (1 << a), a);
         }
     for (int e = 0; e < 3; e++)
         for (int h = 0; h < 2; h++) {
             int32_t nc[4];
-            for (int k = 0; k < 4; k++) {
-                int bits[3];
-                bits[e] = h;
-                bits[(e + 1) % 3] = AROUND_U[k];
-                bits[(e + 2) % 3] = AROUND_V[k];
-                nc[k] = first + child_at(bits);
-            }
+            for (int k = 0; k < 4; k++)
+                nc[k] = first + child_at(e, h, AROUND_U[k], AROUND_V[k]);
             edge_proc(wk, nc, e);
         }
 }
