@@ -263,6 +263,8 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
         p.relax_min_step = p.bounded || !p.may_crease ? ISM_RM_MIN_STEP : 0;
         p.relax_far_step = p.bounded && !p.may_crease ? fmax(ISM_RM_FAR_STEP, p.relax_min_step)
                                                       : p.relax_min_step;
+        p.points = o->locked_points;
+        p.npoints = o->nlocked_points;
         uint8_t reach = relax_reach(&p);
         double was_poorest = 0;
         size_t was_poor = 0;

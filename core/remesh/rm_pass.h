@@ -132,6 +132,9 @@ typedef struct rm_pass {
                                with no needle among the triangles at those corners (two
                                rings of triangles; rm_relax_vertex; at least
                                relax_min_step) */
+    const double *points;   /* the given singular points (3 per point: ism_remesh_options'
+                               locked_points), near which no vertex takes the far step */
+    size_t npoints;
     double *sine;           /* per triangle, or NULL: the sine of its smallest angle as
                                rm_mark_active last measured it (NAN: its shape changed
                                since, rm_shape_changed) */

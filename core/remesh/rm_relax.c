@@ -369,6 +369,16 @@ static bool idle(rm_pass *p, uint32_t v)
     return true;
 }
 
+/* Within this many of its fan's mean edges of a given singular point a vertex keeps the
+ * least step (ISM_RM_MIN_STEP), not the far one: beside a cusp the vertices two rings and
+ * more out, which far_from_features lets take the far step, lie on a tube a few edges
+ * across, and their longer idle steps left a needle in the tube (cusp-a2, 1e-3 box: 8.27°,
+ * 0.007-0.014 from the cusp) whose merge into the cusp (rm_horn.c) made its cone 1.66°
+ * (5.84° before the far step; 6.33° at the cusp). cusp-a2 1e-3 box, the cusp's smallest
+ * angle: 6.28° within 5 edges, 6.33° within 10 (the mesh as with the far step nowhere),
+ * and the same within 20 and 40. */
+#define ISM_RM_FAR_POINT_EDGES 10.0
+
 /* No vertex of v's fan is locked and no triangle with a corner there is under
  * ISM_RM_INSERT_DEG (two rings of triangles round v): v lies more than a ring away from
  * every protected vertex (point, crease, boundary) and no needle lies among those triangles,
@@ -391,6 +401,16 @@ static bool far_from_features(rm_pass *p, uint32_t v)
     return true;
 }
 
+/* v lies farther than ISM_RM_FAR_POINT_EDGES × its fan's mean edge from every given
+ * singular point. */
+static bool far_from_points(const rm_pass *p, uint32_t v, double mean_edge)
+{
+    for (size_t i = 0; i < p->npoints; i++)
+        if (rm_dist(rm_pos(p, v), p->points + 3 * i) < ISM_RM_FAR_POINT_EDGES * mean_edge)
+            return false;
+    return true;
+}
+
 /* Whether v's step d (its fan f) is too short to try: under the least step (relax_min_step,
  * or relax_far_step away from features) × the fan's mean edge, with no needle in its fan. */
 static bool step_too_short(rm_pass *p, uint32_t v, const double d[3], const rm_fan *f)
@@ -400,7 +420,8 @@ static bool step_too_short(rm_pass *p, uint32_t v, const double d[3], const rm_f
         return false;
     if (d2 < p->relax_min_step * p->relax_min_step * e2)
         return true;
-    return d2 < p->relax_far_step * p->relax_far_step * e2 && far_from_features(p, v);
+    return d2 < p->relax_far_step * p->relax_far_step * e2 && far_from_features(p, v) &&
+           far_from_points(p, v, f->mean_edge);
 }
 
 bool rm_relax_vertex(rm_pass *p, uint32_t v)
