@@ -8,27 +8,21 @@
 #include <math.h>
 #include <string.h>
 
-/* Nodes prefetched together: their corners (up to 256 points, siblings share most: ~60–100
- * evaluated) in one gradient batch, their new roots (a few dozen) in one set of lanes. The
- * batched gradient costs about the same per point from 16 points on (evb26). */
+/* Nodes whose corners are prefetched together: up to 256 points, siblings share most, and
+ * the memo holds most from the level above (Klein bottle at E 3.27e-3: ~40 evaluated a
+ * batch), in one gradient batch; the batched gradient costs about the same per point from 16
+ * points on (evb26). Their new roots are gathered across such groups (PREFETCH_EDGES). */
 #define PREFETCH_NODES 32
 #define PREFETCH_POINTS (8 * PREFETCH_NODES)
 /* Edges searched in one set of lanes (ism_regula_falsi_lanes keeps up to 64 running, a
  * finished search's lane taken by the next). */
 #define PREFETCH_EDGES 256
 
-/* A node's corners: their memo slots, keys and world positions. */
-typedef struct node_points {
-    ism_point_entry *slot[8];
-    uint64_t key[8];
-    double p[8][3];
-} node_points;
-
-/* Node nd's corners, as node_corners finds them (corner c at org + (c >> a & 1) steps). A
- * lattice key is the coordinates' fields + 1 (grid.h): a corner's is the origin's plus its
- * offsets in the fields. */
+/* Node nd's corners as node_corners finds them (corner c at org + (c >> a & 1) steps): their
+ * world positions and lattice keys into k (a key is the coordinates' fields + 1, grid.h: a
+ * corner's is the origin's plus its offsets in the fields), their memo slots into slot. */
 static void corners_of(ism_point_entry *table, int bits, const ism_grid *g,
-                       const ism_node *nd, node_points *np)
+                       const ism_node *nd, ism_corners *k, ism_point_entry *slot[8])
 {
     int32_t s = ism_grid_cell_steps(g, nd->level);
     double w[2][3];
@@ -36,48 +30,45 @@ static void corners_of(ism_point_entry *table, int bits, const ism_grid *g,
         w[0][a] = ism_grid_coord(g, a, nd->org[a]);
         w[1][a] = ism_grid_coord(g, a, nd->org[a] + s);
     }
-    uint64_t key0 = ism_lattice_key(nd->org), step[3];
-    for (int a = 0; a < 3; a++) {
-        int32_t ip[3] = {0, 0, 0};
-        ip[a] = s;
-        step[a] = ism_lattice_key(ip) - 1;
-    }
+    uint64_t x = (uint64_t)s << 2 * ISM_LATTICE_KEY_BITS, y = (uint64_t)s << ISM_LATTICE_KEY_BITS,
+             z = (uint64_t)s, key0 = ism_lattice_key(nd->org);
+    const uint64_t off[8] = {0, x, y, x + y, z, x + z, y + z, x + y + z};
     uint64_t mask = ((uint64_t)1 << bits) - 1;
     for (int c = 0; c < 8; c++) {
-        int x = c & 1, y = (c >> 1) & 1, z = (c >> 2) & 1;
-        np->p[c][0] = w[x][0];
-        np->p[c][1] = w[y][1];
-        np->p[c][2] = w[z][2];
-        np->key[c] = key0 + (x ? step[0] : 0) + (y ? step[1] : 0) + (z ? step[2] : 0);
-        np->slot[c] = &table[ism_cache_mix(np->key[c]) & mask];
+        k->p[c][0] = w[c & 1][0];
+        k->p[c][1] = w[(c >> 1) & 1][1];
+        k->p[c][2] = w[(c >> 2) & 1][2];
+        k->key[c] = key0 + off[c];
+        slot[c] = &table[ism_cache_mix(k->key[c]) & mask];
     }
 }
 
-/* The nodes' corner points the memo lacks, evaluated together and stored where their slot
- * still holds them. */
-static void fill_corners(const node_points *np, size_t n, ism_sampler *s)
+/* The points of corners k[0..n) (slots slot[i]) the memo lacks, evaluated together and stored
+ * where their slot still holds them. */
+static void fill_corners(const ism_corners *k, ism_point_entry *const (*slot)[8], size_t n,
+                         ism_sampler *s)
 {
-    ism_point_entry *slot[PREFETCH_POINTS];
+    ism_point_entry *at[PREFETCH_POINTS];
     uint64_t key[PREFETCH_POINTS];
     double p[PREFETCH_POINTS][3], f[PREFETCH_POINTS], g[PREFETCH_POINTS][3];
     size_t m = 0;
     for (size_t i = 0; i < n; i++)
         for (int c = 0; c < 8; c++) {
-            ism_point_entry *e = np[i].slot[c];
-            if (e->key == np[i].key[c])
+            ism_point_entry *e = slot[i][c];
+            if (e->key == k[i].key[c])
                 continue; /* held, or gathered already (filled below) */
-            e->key = np[i].key[c];
-            slot[m] = e;
+            e->key = k[i].key[c];
+            at[m] = e;
             key[m] = e->key;
-            memcpy(p[m++], np[i].p[c], sizeof p[0]);
+            memcpy(p[m++], k[i].p[c], sizeof p[0]);
         }
     if (!m)
         return;
     ism_sample_grad_batch(s, (const double (*)[3])p, f, g, m);
-    for (size_t k = 0; k < m; k++)
-        if (slot[k]->key == key[k]) {
-            slot[k]->f = f[k];
-            memcpy(slot[k]->g, g[k], sizeof g[k]);
+    for (size_t j = 0; j < m; j++)
+        if (at[j]->key == key[j]) {
+            at[j]->f = f[j];
+            memcpy(at[j]->g, g[j], sizeof g[j]);
         }
 }
 
@@ -140,20 +131,18 @@ static void gather_roots(const ism_node_memo *memo, const ism_corners *k, root_b
     }
 }
 
-/* Node np's corners as node_corners hands them to the flatness test, read from the memo
- * slots just filled; false when one was taken over since. */
-static bool corners_from_memo(const ism_node_memo *memo, const node_points *np,
+/* Corners k's values from their memo slots, just filled, as node_corners hands them to the
+ * flatness test; false when a slot was taken over since. */
+static bool corners_from_memo(const ism_node_memo *memo, ism_point_entry *const slot[8],
                               ism_corners *k)
 {
     for (int c = 0; c < 8; c++) {
-        const ism_point_entry *e = np->slot[c];
-        if (e->key != np->key[c])
+        const ism_point_entry *e = slot[c];
+        if (e->key != k->key[c])
             return false;
         k->f[c] = e->f;
         memcpy(k->g[c], e->g, sizeof k->g[c]);
     }
-    memcpy(k->p, np->p, sizeof k->p);
-    memcpy(k->key, np->key, sizeof k->key);
     k->memo = memo;
     return true;
 }
@@ -170,16 +159,16 @@ void ism_prefetch_nodes(const ism_node_memo *memo, ism_point_entry *table, int b
                         const ism_grid *g, const ism_node *const *nd, size_t n,
                         ism_sampler *s, ism_corners *k, bool *have)
 {
-    node_points np[PREFETCH_NODES];
+    ism_point_entry *slot[PREFETCH_NODES][8];
     root_batch rb;
     rb.m = 0;
     for (size_t done = 0; done < n; done += PREFETCH_NODES) {
         size_t m = n - done < PREFETCH_NODES ? n - done : PREFETCH_NODES;
         for (size_t i = 0; i < m; i++)
-            corners_of(table, bits, g, nd[done + i], &np[i]);
-        fill_corners(np, m, s);
+            corners_of(table, bits, g, nd[done + i], &k[done + i], slot[i]);
+        fill_corners(k + done, (ism_point_entry *const (*)[8])slot, m, s);
         for (size_t i = 0; i < m; i++) {
-            have[done + i] = corners_from_memo(memo, &np[i], &k[done + i]);
+            have[done + i] = corners_from_memo(memo, slot[i], &k[done + i]);
             if (have[done + i] && all_finite(k[done + i].f))
                 gather_roots(memo, &k[done + i], &rb, s);
         }
