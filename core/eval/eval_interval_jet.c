@@ -780,3 +780,49 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
     }
     return run(t, ws, box, force, kinks, 1, out, NULL);
 }
+
+/* Whether some bound of g is NaN. */
+static bool ivgrad_nan(const ism_ivgrad *g)
+{
+    bool bad = isnan(g->v.lo) || isnan(g->v.hi);
+    for (int k = 0; k < 3; k++)
+        bad |= isnan(g->d[k].lo) || isnan(g->d[k].hi);
+    return bad;
+}
+
+/* The forced pass differs from the unforced one only at the forced instruction (the ones
+ * before it read their force byte only at a kink, and it is free only there), and there
+ * op_branch keeps the natural enclosure as the value and copies the branch's partials
+ * (take_derivs; sanitize then changes nothing, no bound being NaN): what the unforced pass
+ * left in the operands' registers, when t ends there and nothing overwrote them. */
+bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, ism_ivgrad piece[2])
+{
+    if (!ws || !t || t->len == 0 || ws->nregs < t->nregs)
+        return false;
+    const ism_instr *in = &t->code[t->len - 1];
+    bool rr = in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR;
+    if (!rr && in->op != ISM_OP_MIN_RC && in->op != ISM_OP_MAX_RC)
+        return false;
+    /* every partial taken (all of x, y, z asked), the result its own register */
+    if (in->free_of != 0 || in->out != t->result || in->out == in->a ||
+        (rr && in->out == in->b))
+        return false;
+    const ism_ivjet *a = &ws->r[in->a];
+    ism_ivjet cst = { 0 }; /* op_branch's constant operand: its partials 0 */
+    const ism_ivjet *b = &cst;
+    if (rr)
+        b = &ws->r[in->b];
+    else
+        cst.v = ivc(in->imm);
+    if (decided_branch(in, a->v, b->v) != ISM_BRANCH_FREE)
+        return false;
+    const ism_ivjet *src[2] = { a, b };
+    for (int p = 0; p < 2; p++) {
+        piece[p].v = ws->r[in->out].v;
+        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+            piece[p].d[k] = src[p]->d[k];
+        if (ivgrad_nan(&piece[p]))
+            return false;
+    }
+    return true;
+}
