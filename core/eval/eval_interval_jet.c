@@ -6,6 +6,7 @@
 #include "core/eval/interval_jet.h"
 #include "core/eval/interval_jet_ws.h"
 #include "core/eval/interval_ops.h"
+#include "core/eval/threaded.h"
 #include "core/expr/tape.h"
 #include "core/util/cache_line.h"
 
@@ -290,11 +291,12 @@ static ism_interval second_factor(const ism_instr *in, ism_interval u, ism_inter
 /* One-argument operations other than the affine ones and the branches. The gradient-only
  * pass (second = 0) computes no g'': heart's search spent 26M of 88.7M instructions in
  * interval gradients, the power rule's u^(n−2) among them. */
-static ALWAYS_INLINE void op_unary(ism_ivjet *o, const ism_instr *in, const ism_ivjet *a, unsigned w)
+static ALWAYS_INLINE void op_unary(ism_ivjet *o, const ism_instr *in, int op, const ism_ivjet *a,
+                                   unsigned w)
 {
     ism_interval u = a->v, g, g1;
     double c = in->imm;
-    switch (in->op) {
+    switch (op) {
     case ISM_OP_SQUARE:
         g = iv_square(u);
         g1 = iv_mul_c(u, 2.0);
@@ -469,31 +471,60 @@ static int op_branch(ism_ivjet *o, const ism_instr *in, const ism_ivjet *r, uint
     return 0;
 }
 
+/* Every operation's step, as an expression giving 1 at a free kink (else 0) in o (its
+ * register), a (its first operand's jet), in, r (the registers), W (the partials wanted) and
+ * F (its forced branch, read by min, max and abs alone): one list, expanded by jet_op's
+ * switch (the second-order pass) and by run_grad's labels (the gradient pass). Each step
+ * names its operation as a constant, so the affine and one-argument steps' own switches
+ * fold away. */
+#define JET_OPS(X)                                                                          \
+    X(ISM_OP_CONST, (o->v = ivc(in->imm), set_zero_derivs(o, W), 0))                        \
+    X(ISM_OP_COPY, (affine(o, a, ISM_OP_COPY, in->imm, W), 0))                              \
+    X(ISM_OP_ADD_RR, (op_add(o, a, &r[in->b], 0, W), 0))                                    \
+    X(ISM_OP_ADD_RC, (affine(o, a, ISM_OP_ADD_RC, in->imm, W), 0))                          \
+    X(ISM_OP_SUB_RR, (op_add(o, a, &r[in->b], 1, W), 0))                                    \
+    X(ISM_OP_SUB_CR, (affine(o, a, ISM_OP_SUB_CR, in->imm, W), 0))                          \
+    X(ISM_OP_MUL_RR, (op_mul(o, a, &r[in->b], W), 0))                                       \
+    X(ISM_OP_MUL_RC, (affine(o, a, ISM_OP_MUL_RC, in->imm, W), 0))                          \
+    X(ISM_OP_DIV_RR, (op_div(o, a, &r[in->b], W), 0))                                       \
+    X(ISM_OP_DIV_RC, (affine(o, a, ISM_OP_DIV_RC, in->imm, W), 0))                          \
+    X(ISM_OP_DIV_CR, (op_unary(o, in, ISM_OP_DIV_CR, a, W), 0))                             \
+    X(ISM_OP_MIN_RR, op_branch(o, in, r, F, W))                                             \
+    X(ISM_OP_MIN_RC, op_branch(o, in, r, F, W))                                             \
+    X(ISM_OP_MAX_RR, op_branch(o, in, r, F, W))                                             \
+    X(ISM_OP_MAX_RC, op_branch(o, in, r, F, W))                                             \
+    X(ISM_OP_NEG, (affine(o, a, ISM_OP_NEG, in->imm, W), 0))                                \
+    X(ISM_OP_SQUARE, (op_unary(o, in, ISM_OP_SQUARE, a, W), 0))                             \
+    X(ISM_OP_POWI, (op_unary(o, in, ISM_OP_POWI, a, W), 0))                                 \
+    X(ISM_OP_POWC, (op_unary(o, in, ISM_OP_POWC, a, W), 0))                                 \
+    X(ISM_OP_SQRT, (op_unary(o, in, ISM_OP_SQRT, a, W), 0))                                 \
+    X(ISM_OP_SIN, (op_unary(o, in, ISM_OP_SIN, a, W), 0))                                   \
+    X(ISM_OP_COS, (op_unary(o, in, ISM_OP_COS, a, W), 0))                                   \
+    X(ISM_OP_TAN, (op_unary(o, in, ISM_OP_TAN, a, W), 0))                                   \
+    X(ISM_OP_EXP, (op_unary(o, in, ISM_OP_EXP, a, W), 0))                                   \
+    X(ISM_OP_LOG, (op_unary(o, in, ISM_OP_LOG, a, W), 0))                                   \
+    X(ISM_OP_ABS, op_branch(o, in, r, F, W))
+ISM_THREADED_COMPLETE(JET_OPS, "JET_OPS names every operation (the label table)");
+
+/* An operation code past the list: the whole line, its derivatives too. */
+#define JET_BAD (o->v = ism_iv_whole(), set_whole_derivs(o, a, a, W), 0)
+
 /* One instruction; returns 1 when it is a free kink. */
 static ALWAYS_INLINE int jet_op(const ism_instr *in, ism_ivjet *r, uint8_t force, unsigned w)
 {
     ism_ivjet *o = &r[in->out];
     const ism_ivjet *a = &r[in->a];
+#define W w
+#define F force
+#define CASE(OP, E) case OP: return E;
     switch (in->op) {
-    case ISM_OP_CONST:
-        o->v = ivc(in->imm);
-        set_zero_derivs(o, w);
-        return 0;
-    case ISM_OP_COPY: case ISM_OP_ADD_RC: case ISM_OP_SUB_CR: case ISM_OP_MUL_RC:
-    case ISM_OP_DIV_RC: case ISM_OP_NEG:
-        affine(o, a, in->op, in->imm, w);
-        return 0;
-    case ISM_OP_ADD_RR: op_add(o, a, &r[in->b], 0, w); return 0;
-    case ISM_OP_SUB_RR: op_add(o, a, &r[in->b], 1, w); return 0;
-    case ISM_OP_MUL_RR: op_mul(o, a, &r[in->b], w); return 0;
-    case ISM_OP_DIV_RR: op_div(o, a, &r[in->b], w); return 0;
-    case ISM_OP_MIN_RR: case ISM_OP_MIN_RC: case ISM_OP_MAX_RR: case ISM_OP_MAX_RC:
-    case ISM_OP_ABS:
-        return op_branch(o, in, r, force, w);
+        JET_OPS(CASE)
     default:
-        op_unary(o, in, a, w);
-        return 0;
+        return JET_BAD;
     }
+#undef CASE
+#undef F
+#undef W
 }
 
 #if defined(__SSE2__)
@@ -586,19 +617,27 @@ static ALWAYS_INLINE void load_box(ism_ivjet *r, const ism_interval box[3], unsi
     }
 }
 
-/* keep: NULL, or the gradient pass's (second = 0) record of every instruction's value and
- * first partials as written to its register (ism_eval_interval_grad_kept). */
-static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
-                                const uint8_t *force, uint8_t *kinks, int second, ism_ivjet *out,
-                                ism_kept_vd *keep)
+/* A tape longer than the workspace's registers: f and every partial the whole line. */
+static size_t run_unfit(ism_ivjet *out, unsigned all)
 {
-    const unsigned all = want_of(7u, second, false);
-    if (!ws || !t || ws->nregs < t->nregs) {
-        ism_ivjet any = { .d = { { -1.0, 1.0 } } }; /* depends on x: whole everywhere */
-        out->v = ism_iv_whole();
-        set_whole_derivs(out, &any, &any, all);
-        return (size_t)-1;
-    }
+    ism_ivjet any = { .d = { { -1.0, 1.0 } } }; /* depends on x: whole everywhere */
+    out->v = ism_iv_whole();
+    set_whole_derivs(out, &any, &any, all);
+    return (size_t)-1;
+}
+
+static bool fits(const ism_tape *t, const ism_ivjet_ws *ws)
+{
+    return ws && t && ws->nregs >= t->nregs;
+}
+
+/* The second-order pass: jet_op's switch over the tape. */
+static size_t run_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                      const uint8_t *force, uint8_t *kinks, ism_ivjet *out)
+{
+    const unsigned all = want_of(7u, 1, false);
+    if (!fits(t, ws))
+        return run_unfit(out, all);
     ism_ivjet *r = ws->r;
     load_box(r, box, all);
     size_t nkinks = 0;
@@ -610,23 +649,108 @@ static ALWAYS_INLINE size_t run(const ism_tape *t, ism_ivjet_ws *ws, const ism_i
             kink = jet_op(in, r, f, all);
             sanitize(&r[in->out], all);
         } else {
-            unsigned w = want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, second, in->smooth);
+            unsigned w = want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, 1, in->smooth);
             kink = jet_op(in, r, f, w);
             sanitize(&r[in->out], w);
         }
         nkinks += (size_t)kink;
         if (kinks)
             kinks[i] = (uint8_t)kink;
-        if (keep) {
-            const ism_ivjet *o = &r[in->out];
-            keep[i][0] = o->v;
-            _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-                keep[i][k + 1] = o->d[k];
-        }
     }
     *out = r[t->result];
     return nkinks;
 }
+
+/* The gradient pass (value and first partials) by direct threading (threaded.h; the pattern
+ * of eval_interval.c's ism_interval_run): each operation's code, from JET_OPS, ends in its
+ * own end test and its own jump to the next instruction's, where jet_op's switch in a loop
+ * paid a bound test, a table offset, the loop's test and each step's own switch on every
+ * instruction. Each step is expanded twice: for an instruction that depends on all three
+ * variables (the partials wanted a constant, their tests folded) and for the others (the
+ * tape's free_of). kinks (when asked) is cleared first and set at the free kinks, which only
+ * min, max and abs make. KEEP: NULL, or ism_eval_interval_grad_kept's record of every
+ * instruction's value and first partials as written to its register (the expanding
+ * function's t, ws, box, force, kinks, out and keep are its arguments). A macro, not a
+ * function: each expansion needs its own labels (GCC inlines no function that takes a
+ * label's address). */
+#define RUN_GRAD_BODY                                                                       \
+    do {                                                                                    \
+        if (!fits(t, ws))                                                                   \
+            return run_unfit(out, 7u);                                                      \
+        ISM_THREADED_TABLE(next_op, JET_OPS);                                               \
+        ism_ivjet *r = (ws)->r;                                                             \
+        load_box(r, box, 7u);                                                               \
+        size_t nkinks = 0;                                                                  \
+        const ism_instr *in = (t)->code, *const end = (t)->code + (t)->len;                 \
+        clear_kinks(kinks, (t)->len);                                                       \
+        if (in == end)                                                                      \
+            goto done;                                                                      \
+        goto *next_op[in->op];                                                              \
+        JET_OPS(GRAD_STEP)                                                                  \
+        GRAD_STEP(BAD, JET_BAD)                                                             \
+    done:                                                                                   \
+        *(out) = r[(t)->result];                                                            \
+        return nkinks;                                                                      \
+    } while (0)
+
+/* One operation's labelled code in RUN_GRAD_BODY. */
+#define F (force ? force[in - t->code] : ISM_BRANCH_FREE)
+#define GRAD_STEP(OP, E)                                                                    \
+    L_##OP : {                                                                              \
+        ism_ivjet *o = &r[in->out];                                                         \
+        const ism_ivjet *a = &r[in->a];                                                     \
+        (void)a; /* not every step reads it */                                              \
+        int kink;                                                                           \
+        if (in->free_of == 0) {                                                             \
+            const unsigned W = 7u;                                                          \
+            kink = E;                                                                       \
+            sanitize(o, W);                                                                 \
+        } else {                                                                            \
+            const unsigned W = ISM_FREE_ALL & ~(unsigned)in->free_of;                       \
+            kink = E;                                                                       \
+            sanitize(o, W);                                                                 \
+        }                                                                                   \
+        if (kink) {                                                                         \
+            nkinks++;                                                                       \
+            if (kinks)                                                                      \
+                kinks[in - t->code] = 1;                                                    \
+        }                                                                                   \
+        if (keep)                                                                           \
+            keep_vd(&keep[in - t->code], o);                                                \
+    }                                                                                       \
+    ISM_THREADED_NEXT(next_op, in, end, goto done)
+
+static ALWAYS_INLINE void clear_kinks(uint8_t *kinks, size_t n)
+{
+    if (kinks)
+        memset(kinks, 0, n);
+}
+
+/* A kept record's entry: o's value and first partials. */
+static ALWAYS_INLINE void keep_vd(ism_kept_vd *k, const ism_ivjet *o)
+{
+    (*k)[0] = o->v;
+    _Pragma("GCC unroll 3") for (int i = 0; i < 3; i++)
+        (*k)[i + 1] = o->d[i];
+}
+
+static size_t run_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                       const uint8_t *force, uint8_t *kinks, ism_ivjet *out)
+{
+    ism_kept_vd *const keep = NULL;
+    RUN_GRAD_BODY;
+}
+
+static size_t run_grad_kept(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
+                            ism_ivjet *out, ism_kept_vd *keep)
+{
+    const uint8_t *const force = NULL;
+    uint8_t *const kinks = NULL;
+    RUN_GRAD_BODY;
+}
+#undef GRAD_STEP
+#undef F
+#undef RUN_GRAD_BODY
 
 /* The Hessian part of one instruction (hess_from_kept(in->op)), the second-order pass's
  * want bits w: the h lines of jet_op's steps for it, reading the operands' registers as
@@ -711,7 +835,7 @@ size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_int
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out)
 {
     ism_ivjet j;
-    size_t n = run(t, ws, box, force, kinks, 0, &j, NULL);
+    size_t n = run_grad(t, ws, box, force, kinks, &j);
     out->v = j.v;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         out->d[k] = j.d[k];
@@ -726,7 +850,7 @@ size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
         return ism_eval_interval_grad(t, ws, box, NULL, NULL, out);
     ws->kept_ok = false;
     ism_ivjet j;
-    size_t n = run(t, ws, box, NULL, NULL, 0, &j, ws->kept);
+    size_t n = run_grad_kept(t, ws, box, &j, ws->kept);
     out->v = j.v;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         out->d[k] = j.d[k];
@@ -778,7 +902,7 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
                       ISM_IVG_VL};
         return hess_only(t, ws, &k, box, kinks, out);
     }
-    return run(t, ws, box, force, kinks, 1, out, NULL);
+    return run_jet(t, ws, box, force, kinks, out);
 }
 
 /* Whether some bound of g is NaN. */

@@ -105,7 +105,7 @@ static inline ism_interval iv_mul_scalar(ism_interval a, ism_interval b)
  * and then the min of the two are min4's, in min4's order. A NaN product (0 * inf, rare)
  * takes the scalar path. The interval jets spent ~40 instructions per product, a third of
  * them the four NaN tests (callgrind, torus at 1e-2). */
-static inline ism_interval iv_mul(ism_interval a, ism_interval b)
+static inline __attribute__((always_inline)) ism_interval iv_mul(ism_interval a, ism_interval b)
 {
 #if defined(__SSE2__)
     __m128d va = _mm_set_pd(a.hi, a.lo);
