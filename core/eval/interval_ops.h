@@ -49,24 +49,63 @@ static inline ism_interval ism_iv_sane(ism_interval r)
     return iv(nan_to(r.lo, -INFINITY), nan_to(r.hi, INFINITY));
 }
 
+#if defined(__SSE2__)
+/* An interval as one SSE2 vector [lo, hi] and back. */
+static inline __m128d iv_vec(ism_interval a) { return _mm_set_pd(a.hi, a.lo); }
+
+static inline ism_interval iv_of_vec(__m128d v)
+{
+    ism_interval r;
+    _mm_storeu_pd(&r.lo, v);
+    return r;
+}
+
+/* [down1(lo), up1(hi)] in one vector pass: the same IEEE operations lane by lane (x - c is
+ * x + (-c), and |x| * (-r) is -(|x| * r) exactly), so the same bits. */
+static inline __m128d round1_out(__m128d v)
+{
+    const __m128d step = _mm_set_pd(ISM_ROUND1_ABS, -ISM_ROUND1_ABS);
+    const __m128d rel = _mm_set_pd(ISM_ROUND1_REL, -ISM_ROUND1_REL);
+    __m128d mag = _mm_andnot_pd(_mm_set1_pd(-0.0), v);
+    return _mm_add_pd(_mm_add_pd(v, step), _mm_mul_pd(mag, rel));
+}
+#endif
+
 static inline ism_interval iv_add(ism_interval a, ism_interval b)
 {
+#if defined(__SSE2__)
+    return iv_of_vec(round1_out(_mm_add_pd(iv_vec(a), iv_vec(b))));
+#else
     return iv(down1(a.lo + b.lo), up1(a.hi + b.hi));
+#endif
 }
 
 static inline ism_interval iv_add_c(ism_interval a, double c)
 {
+#if defined(__SSE2__)
+    return iv_of_vec(round1_out(_mm_add_pd(iv_vec(a), _mm_set1_pd(c))));
+#else
     return iv(down1(a.lo + c), up1(a.hi + c));
+#endif
 }
 
+/* [a.lo - b.hi, a.hi - b.lo]: b's bounds swapped into the lanes. */
 static inline ism_interval iv_sub(ism_interval a, ism_interval b)
 {
+#if defined(__SSE2__)
+    return iv_of_vec(round1_out(_mm_sub_pd(iv_vec(a), _mm_set_pd(b.lo, b.hi))));
+#else
     return iv(down1(a.lo - b.hi), up1(a.hi - b.lo));
+#endif
 }
 
 static inline ism_interval iv_c_sub(double c, ism_interval a)
 {
+#if defined(__SSE2__)
+    return iv_of_vec(round1_out(_mm_sub_pd(_mm_set1_pd(c), _mm_set_pd(a.lo, a.hi))));
+#else
     return iv(down1(c - a.hi), up1(c - a.lo));
+#endif
 }
 
 static inline ism_interval iv_neg(ism_interval a)
@@ -115,9 +154,9 @@ static inline __attribute__((always_inline)) ism_interval iv_mul(ism_interval a,
                                                    _mm_cmpunord_pd(r, r))) != 0, 0))
         return iv_mul_scalar(a, b);
     __m128d mn = _mm_min_pd(q, r), mx = _mm_max_pd(q, r);
-    double lo = _mm_cvtsd_f64(_mm_min_sd(mn, _mm_unpackhi_pd(mn, mn)));
-    double hi = _mm_cvtsd_f64(_mm_max_sd(mx, _mm_unpackhi_pd(mx, mx)));
-    return iv(down1(lo), up1(hi));
+    __m128d lo = _mm_min_sd(mn, _mm_unpackhi_pd(mn, mn));
+    __m128d hi = _mm_max_sd(mx, _mm_unpackhi_pd(mx, mx));
+    return iv_of_vec(round1_out(_mm_unpacklo_pd(lo, hi)));
 #else
     return iv_mul_scalar(a, b);
 #endif
@@ -127,12 +166,20 @@ static inline __attribute__((always_inline)) ism_interval iv_mul(ism_interval a,
  * instruction); no product can be NaN. */
 static inline ism_interval iv_mul_cpos(ism_interval a, double c)
 {
+#if defined(__SSE2__)
+    return iv_of_vec(round1_out(_mm_mul_pd(iv_vec(a), _mm_set1_pd(c))));
+#else
     return iv(down1(a.lo * c), up1(a.hi * c));
+#endif
 }
 
 static inline ism_interval iv_mul_cneg(ism_interval a, double c)
 {
+#if defined(__SSE2__)
+    return iv_of_vec(round1_out(_mm_mul_pd(_mm_set_pd(a.lo, a.hi), _mm_set1_pd(c))));
+#else
     return iv(down1(a.hi * c), up1(a.lo * c));
+#endif
 }
 
 static inline ism_interval iv_mul_c(ism_interval a, double c)
@@ -237,7 +284,13 @@ static inline ism_interval iv_square(ism_interval a)
     int nonneg = a.lo >= 0.0, nonpos = a.hi <= 0.0; /* both tested: no branch */
     double inner = nonpos ? h2 : 0.0;
     double lo = nonneg ? l2 : inner;
+#if defined(__SSE2__)
+    /* maxsd takes its first operand where ism_max does (a > b), the high lane as it is */
+    __m128d r = round1_out(_mm_set_pd(ism_max(l2, h2), lo));
+    return iv_of_vec(_mm_max_sd(r, _mm_setzero_pd()));
+#else
     return iv(ism_max(down1(lo), 0.0), up1(ism_max(l2, h2)));
+#endif
 }
 
 static inline ism_interval iv_sqrt(ism_interval a)

@@ -458,8 +458,7 @@ static void natural_value(const char *name, const ism_tape *t, const ism_interva
 
 /* nboxes random boxes of within (one in eight a point), then as many points, then the edge
  * boxes. */
-static void natural_values(const char *name, const ism_tape *t, const double *within,
-                           uint64_t seed)
+static void natural_values(const char *name, ism_tape *t, const double *within, uint64_t seed)
 {
     size_t nboxes = test_scaled(100);
     test_rng rng = { seed };
@@ -480,19 +479,27 @@ static void natural_values(const char *name, const ism_tape *t, const double *wi
         natural_value(name, t, EDGE_BOXES[b]);
 }
 
-Test(eval_interval_jet, natural_value_is_gradient_value)
+/* check(name, tape, within, seed) over every operation's expression (within ±2, seeds from
+ * ops_seed) and every example surface (its own box, seeds from surface_seed). */
+static void over_every_tape(void (*check)(const char *, ism_tape *, const double *, uint64_t),
+                            uint64_t ops_seed, uint64_t surface_seed)
 {
     const double within[6] = { -2, -2, -2, 2, 2, 2 };
     for (size_t i = 0; i < sizeof OPS_EXPRS / sizeof OPS_EXPRS[0]; i++) {
         ism_tape *t = compile(OPS_EXPRS[i]);
-        natural_values(OPS_EXPRS[i], t, within, 1200 + i);
+        check(OPS_EXPRS[i], t, within, ops_seed + i);
         ism_tape_free(t);
     }
     for (size_t s = 0; s < TEST_NSURFACES; s++) {
         ism_tape *t = test_surface_compile(&TEST_SURFACES[s]);
-        natural_values(TEST_SURFACES[s].name, t, TEST_SURFACES[s].box, 1300 + s);
+        check(TEST_SURFACES[s].name, t, TEST_SURFACES[s].box, surface_seed + s);
         ism_tape_free(t);
     }
+}
+
+Test(eval_interval_jet, natural_value_is_gradient_value)
+{
+    over_every_tape(natural_values, 1200, 1300);
 }
 
 /* A gradient kept (ism_eval_interval_grad_kept) then the jet of the same box: the jet computes
@@ -757,8 +764,8 @@ static void grad_as_jet(const char *name, const ism_tape *t, const ism_interval 
               J.d[0].lo, J.d[0].hi);
 }
 
-static void grads_as_jets(const char *name, const ism_tape *t, const double *within,
-                          uint64_t seed)
+static void grads_as_jets_once(const char *name, const ism_tape *t, const double *within,
+                               uint64_t seed)
 {
     ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
     cr_assert(jw);
@@ -780,22 +787,19 @@ static void grads_as_jets(const char *name, const ism_tape *t, const double *wit
     ism_ivjet_ws_free(jw);
 }
 
+/* The tape as compiled, then with free_of cleared (every step's other copy). */
+static void grads_as_jets(const char *name, ism_tape *t, const double *within, uint64_t seed)
+{
+    grads_as_jets_once(name, t, within, seed);
+    for (size_t k = 0; k < t->len; k++)
+        t->code[k].free_of = t->code[k].smooth = 0;
+    grads_as_jets_once(name, t, within, seed + 1000);
+}
+
 Test(eval_interval_jet, gradient_pass_is_the_second_order_pass_value_and_partials)
 {
+    over_every_tape(grads_as_jets, 2100, 2300);
     const double within[6] = { -2, -2, -2, 2, 2, 2 };
-    for (size_t i = 0; i < sizeof OPS_EXPRS / sizeof OPS_EXPRS[0]; i++) {
-        ism_tape *t = compile(OPS_EXPRS[i]);
-        grads_as_jets(OPS_EXPRS[i], t, within, 2100 + i);
-        for (size_t k = 0; k < t->len; k++) /* the same without free_of: every step's other copy */
-            t->code[k].free_of = t->code[k].smooth = 0;
-        grads_as_jets(OPS_EXPRS[i], t, within, 2200 + i);
-        ism_tape_free(t);
-    }
-    for (size_t s = 0; s < TEST_NSURFACES; s++) {
-        ism_tape *t = test_surface_compile(&TEST_SURFACES[s]);
-        grads_as_jets(TEST_SURFACES[s].name, t, TEST_SURFACES[s].box, 2300 + s);
-        ism_tape_free(t);
-    }
     /* an operation code past the list: the whole line in both, its partials too */
     ism_tape *t = compile("x*y + z");
     t->code[t->len - 1].op = ISM_OP_COUNT + 3;
