@@ -6,6 +6,7 @@
 #define ISM_DERIV_RULES_H
 
 #include <math.h>
+#include "core/eval/sincos.h"
 #include "core/expr/scalar_ops.h"
 #include "core/expr/tape.h"
 
@@ -95,8 +96,8 @@ static inline ism_chain ism_unary_chain(const ism_instr *in, double u)
             r.g2 = -0.5 * r.g1 / u;
         }
         break;
-    case ISM_OP_SIN: r.g = sin(u); r.g1 = cos(u); r.g2 = -r.g; break;
-    case ISM_OP_COS: r.g = cos(u); r.g1 = -sin(u); r.g2 = -r.g; break;
+    case ISM_OP_SIN: ism_sincos(u, &r.g, &r.g1); r.g2 = -r.g; break; /* sincos.h: the */
+    case ISM_OP_COS: ism_sincos(u, &r.g1, &r.g); r.g1 = -r.g1; r.g2 = -r.g; break; /* others' bits */
     case ISM_OP_TAN:
         r.g = tan(u);
         r.g1 = 1.0 + r.g * r.g;

@@ -264,8 +264,18 @@ KERNEL_R(k_square, a[j] * a[j])
 KERNEL_R(k_abs, fabs(a[j]))
 KERNEL_RC(k_powc, ism_powc(a[j], c))
 KERNEL_R(k_sqrt, ism_sqrt_clip(a[j]))
-KERNEL_R(k_sin, sin(a[j]))
-KERNEL_R(k_cos, cos(a[j]))
+/* sin or cos (sine: true) of a group, four lanes at a time by sincos.h's own pair: the
+ * bits ism_eval_point's memo holds */
+static inline __attribute__((always_inline)) void k_trig(double *restrict o,
+                                                         const double *restrict a, bool sine)
+{
+    _Pragma("GCC unroll 8")
+    for (size_t j = 0; j < LANES; j += 4) {
+        v4d s, c;
+        ism_sincos4(v4_ld(a + j), &s, &c);
+        v4_st(o + j, sine ? s : c);
+    }
+}
 KERNEL_R(k_tan, tan(a[j]))
 KERNEL_R(k_exp, exp(a[j]))
 KERNEL_R(k_log, ism_log_clip(a[j]))
@@ -311,8 +321,8 @@ static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, 
     case ISM_OP_POWI: powi_lanes(out, ra, in->b, ngroups); break;
     case ISM_OP_POWC: RUN_RC(k_powc); break;
     case ISM_OP_SQRT: RUN_R(k_sqrt); break;
-    case ISM_OP_SIN: RUN_R(k_sin); break;
-    case ISM_OP_COS: RUN_R(k_cos); break;
+    case ISM_OP_SIN: for (size_t g = 0; g < ngroups; g++) k_trig(out + g * LANES, ra + g * LANES, true); break;
+    case ISM_OP_COS: for (size_t g = 0; g < ngroups; g++) k_trig(out + g * LANES, ra + g * LANES, false); break;
     case ISM_OP_TAN: RUN_R(k_tan); break;
     case ISM_OP_EXP: RUN_R(k_exp); break;
     case ISM_OP_LOG: RUN_R(k_log); break;

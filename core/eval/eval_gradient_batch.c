@@ -2,8 +2,9 @@
  * eval_gradient.c), each register a value and three partials of ISM_GRAD_BATCH lanes, each
  * instruction one loop over the lanes. Every lane computes exactly what ism_eval_gradient
  * computes at its point, operation for operation (min and max pass on the whole chosen
- * operand; the chain rule gives 0 where g' is 0; sines and cosines through the same memo of
- * sincos pairs), so the two agree bit for bit: the polygoniser may use either.
+ * operand; the chain rule gives 0 where g' is 0; sines and cosines by sincos.h's own pair,
+ * four lanes at once here, one through the memo there), so the two agree bit for bit: the
+ * polygoniser may use either.
  *
  * The lanes are walked in groups of VL, each group one value of GCC's vector extension (the
  * IEEE operations of the scalar code, element by element; the chain rule's and min/max's
@@ -13,7 +14,7 @@
 #include "core/eval/avx2_clone.h"
 #include "core/eval/deriv_rules.h"
 #include "core/eval/lanes4.h"
-#include "core/eval/trig_pair.h"
+#include "core/eval/sincos.h"
 #include "core/eval/workspace.h"
 #include <stdint.h>
 
@@ -127,6 +128,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
      * a third of the torus's batched steps were address arithmetic) */
     const ism_instr ins = *code, *in = &ins;
     const size_t n = ng * VL;
+    (void)trig; /* sines and cosines: ism_sincos4 on whole groups, not the memo */
     double *ov = comp(regs, in->out, 0);
     const double *av = comp(regs, in->a, 0);
     const double *bv = comp(regs, ism_op_has_reg_b(in->op) ? in->b : in->a, 0);
@@ -243,12 +245,14 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         break;
     }
     case ISM_OP_SIN:
-    case ISM_OP_COS:
-        for (size_t j = 0; j < n; j++) {
-            double s, c;
-            ism_trig_pair(trig, av[j], &s, &c);
-            ov[j] = in->op == ISM_OP_SIN ? s : c;
-            g1[j] = in->op == ISM_OP_SIN ? c : -s;
+    case ISM_OP_COS: /* sin and cos of a group at once (sincos.h): what the scalar evaluator's
+                        memo holds for each lane, bit for bit */
+        #pragma GCC unroll 4
+        for (size_t g = 0; g < ng; g++) {
+            v4d s, c;
+            ism_sincos4(v4_ld(av + g * VL), &s, &c);
+            v4_st(ov + g * VL, in->op == ISM_OP_SIN ? s : c);
+            v4_st(g1 + g * VL, in->op == ISM_OP_SIN ? c : -s);
         }
         break;
     case ISM_OP_POWI: { /* a^n and n a^(n-2) a: ism_unary_chain's g and g', lane by lane

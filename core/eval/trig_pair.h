@@ -1,13 +1,13 @@
 /* trig_pair.h — the sine and cosine of one argument, computed as a pair. Surfaces such as the
  * gyroid take both of the same argument (sin(k*x) … cos(k*x)), and the derivative of either
- * needs the other; sincos gives both for little more than the price of one. A memo of
+ * needs the other; ism_sincos (sincos.h, our own, not libm's) gives both at once. A memo of
  * arguments, kept by the workspace, hands out the second of the pair and repeats. It is
- * keyed on the argument's bits, so a hit is exactly what a fresh call would return (and
- * glibc's sincos returns bit for bit what sin and cos return). Not public. */
+ * keyed on the argument's bits, so a hit is exactly what a fresh call would return, and what
+ * the batched evaluators' ism_sincos4 computes four lanes at a time. Not public. */
 #ifndef ISM_TRIG_PAIR_H
 #define ISM_TRIG_PAIR_H
 
-#include <math.h>
+#include "core/eval/sincos.h"
 #include <stdint.h>
 #include <string.h>
 
@@ -21,8 +21,15 @@
  * well within a core's second-level cache, 1 MB here). 2^ISM_TRIG_CACHE_SMALL_BITS for
  * the others (nothing looks there unless the workspace evaluates another tape): filling 2^13
  * entries cost the sphere at E = 0.0141, 2.86M instructions in all, 9.5% more. Every entry
- * starts as the pair of +0.0, which is what sincos gives there, so no entry is ever
- * invalid. */
+ * starts as the pair of +0.0, which is what ism_sincos gives there, so no entry is ever
+ * invalid.
+ *
+ * A second table of as many entries holds libm's pairs for the interval evaluator's bounds
+ * (eval_interval.c: sound under glibc's documented error, which ism_sincos's measured one is
+ * not). The bounds are lattice coordinates that repeat from box to box: gyroid ball at
+ * E = 1e-3 (callgrind, as above), the 279K interval sines and cosines called libm's sin and
+ * cos 558K times without a memo (47.5M instructions), 1,833 times (0.24M) through this
+ * table. */
 #define ISM_TRIG_CACHE_BITS 12
 #define ISM_TRIG_CACHE_SMALL_BITS 9
 
@@ -32,29 +39,49 @@ typedef struct ism_trig_entry {
 } ism_trig_entry;
 
 typedef struct ism_trig_cache {
-    uint64_t mask; /* entries − 1 (a power of two, at most 2^ISM_TRIG_CACHE_BITS) */
-    ism_trig_entry e[];
+    uint64_t mask; /* entries − 1 of each table (a power of two, at most 2^ISM_TRIG_CACHE_BITS) */
+    ism_trig_entry e[]; /* ism_sincos's pairs, then (from mask + 1 on) libm's */
 } ism_trig_cache;
 
-/* The bytes of a cache of 2^bits entries. */
+/* The bytes of a cache of 2^bits entries in each table. */
 static inline size_t ism_trig_cache_size(unsigned bits)
 {
-    return sizeof(ism_trig_cache) + ((size_t)1 << bits) * sizeof(ism_trig_entry);
+    return sizeof(ism_trig_cache) + ((size_t)2 << bits) * sizeof(ism_trig_entry);
 }
 
 static inline void ism_trig_cache_init(ism_trig_cache *m, unsigned bits)
 {
     m->mask = ((uint64_t)1 << bits) - 1;
-    for (uint64_t i = 0; i <= m->mask; i++)
-        m->e[i] = (ism_trig_entry){0, 0.0, 1.0}; /* sincos(+0.0) */
+    for (uint64_t i = 0; i <= 2 * m->mask + 1; i++)
+        m->e[i] = (ism_trig_entry){0, 0.0, 1.0}; /* ism_sincos(+0.0), and libm's */
+}
+
+/* u's slot in a table of mask + 1 entries */
+static inline ism_trig_entry *ism_trig_slot(ism_trig_entry *table, uint64_t mask, double u,
+                                            uint64_t *key)
+{
+    memcpy(key, &u, sizeof *key);
+    return &table[((*key * 0x9e3779b97f4a7c15ull) >> (64 - ISM_TRIG_CACHE_BITS)) & mask];
 }
 
 static inline void ism_trig_pair(ism_trig_cache *m, double u, double *s, double *c)
 {
     uint64_t key;
-    memcpy(&key, &u, sizeof key);
-    ism_trig_entry *e =
-        &m->e[((key * 0x9e3779b97f4a7c15ull) >> (64 - ISM_TRIG_CACHE_BITS)) & m->mask];
+    ism_trig_entry *e = ism_trig_slot(m->e, m->mask, u, &key);
+    if (e->key != key) {
+        ism_sincos(u, &e->s, &e->c);
+        e->key = key;
+    }
+    *s = e->s;
+    *c = e->c;
+}
+
+/* libm's sin u and cos u (glibc: what sin and cos return, bit for bit), for bounds that must
+ * be sound. */
+static inline void ism_trig_pair_libm(ism_trig_cache *m, double u, double *s, double *c)
+{
+    uint64_t key;
+    ism_trig_entry *e = ism_trig_slot(m->e + m->mask + 1, m->mask, u, &key);
     if (e->key != key) {
         sincos(u, &e->s, &e->c);
         e->key = key;

@@ -1,0 +1,178 @@
+/* test_sincos.c — the evaluators' own sine and cosine (core/eval/sincos.h): their error in
+ * ulps against long double sinl / cosl (glibc's, ~2^-64 relative) over 10^7 arguments across
+ * the whole range the reduction covers (uniform at every magnitude from 2^-30 to
+ * ISM_SINCOS_LIMIT, and next to multiples of pi/2, where the reduction cancels); one lane and
+ * four lanes bit for bit; libm's bits past the range and for non-finite arguments; and every
+ * point evaluator (one point, batch, gradient, batched gradient, Hessian) of a trig surface
+ * giving the same f bit for bit. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <string.h>
+
+#include "core/eval/sincos.h"
+#include "core/eval/eval.h"
+#include "test_eval_surfaces.h"
+
+/* The bound this file asserts, from the measurement it repeats (10^7 arguments, seed below):
+ * sine 0.750 ulp, cosine 0.750 ulp (libm's own, measured the same way: 0.515). */
+#define SINCOS_MAX_ULP 0.76
+/* Own and libm's may differ by one rounding each: at most this far apart, in libm's ulps */
+#define SINCOS_FROM_LIBM_ULP 1.0
+
+/* |v - t| in units of the last place of the double nearest t */
+static double ulps(double v, long double t)
+{
+    if (t == 0)
+        return v == 0 ? 0 : INFINITY;
+    int e;
+    frexpl(t, &e);
+    return (double)(fabsl((long double)v - t) / ldexpl(1.0L, e - 53));
+}
+
+/* The i-th test argument, a quarter each: uniform in ±2^m for a random m in [-30, 17]
+ * (ISM_SINCOS_LIMIT = 2^17); uniform in ±ISM_SINCOS_LIMIT; within 2^-20 of k pi/2 for a
+ * random k in range; and the double nearest k pi (long double's pi) moved by up to 8 ulps,
+ * where sin x is smallest against x (the reduction's hardest case). */
+static double argument(test_rng *r, size_t i)
+{
+    double k = floor(test_uniform(r, -ISM_SINCOS_LIMIT, ISM_SINCOS_LIMIT) / M_PI * 2);
+    switch (i % 4) {
+    case 0:
+        return ldexp(test_uniform(r, -1, 1), (int)floor(test_uniform(r, -30, 18)));
+    case 1:
+        return test_uniform(r, -ISM_SINCOS_LIMIT, ISM_SINCOS_LIMIT);
+    case 2:
+        return (double)((long double)k * (M_PIl / 2)) + test_uniform(r, -0x1p-20, 0x1p-20);
+    default: {
+        double x = (double)(floorl(k / 2) * M_PIl);
+        int steps = (int)floor(test_uniform(r, -8, 9));
+        for (; steps > 0; steps--)
+            x = nextafter(x, INFINITY);
+        for (; steps < 0; steps++)
+            x = nextafter(x, -INFINITY);
+        return x;
+    }
+    }
+}
+
+Test(sincos, within_its_bound_of_long_double_and_a_rounding_of_libm)
+{
+    test_rng r = {27};
+    size_t n = test_scaled(10000000);
+    double worst_s = 0, worst_c = 0, xs = 0, xc = 0;
+    for (size_t i = 0; i < n; i++) {
+        double x = argument(&r, i), s, c, ls, lc;
+        ism_sincos(x, &s, &c);
+        sincos(x, &ls, &lc);
+        long double ts = sinl(x), tc = cosl(x);
+        double es = ulps(s, ts), ec = ulps(c, tc);
+        if (es > worst_s)
+            worst_s = es, xs = x;
+        if (ec > worst_c)
+            worst_c = ec, xc = x;
+        if (ulps(s, ls) > SINCOS_FROM_LIBM_ULP || ulps(c, lc) > SINCOS_FROM_LIBM_ULP)
+            cr_assert_fail("x %a: own (%a, %a), libm (%a, %a)", x, s, c, ls, lc);
+    }
+    cr_assert(worst_s <= SINCOS_MAX_ULP, "sin %.3f ulp at x %a", worst_s, xs);
+    cr_assert(worst_c <= SINCOS_MAX_ULP, "cos %.3f ulp at x %a", worst_c, xc);
+    /* an evaluation this close to its bound on both: the measurement is not vacuous */
+    cr_assert(worst_s > 0.5 && worst_c > 0.5, "sin %.3f, cos %.3f", worst_s, worst_c);
+}
+
+/* Closed forms: signed zeros, the exact 1 of cos 0, the quadrants' signs, sin^2 + cos^2. */
+Test(sincos, closed_forms_and_signs)
+{
+    double s, c;
+    ism_sincos(0.0, &s, &c);
+    cr_assert(s == 0 && !signbit(s) && c == 1.0);
+    ism_sincos(-0.0, &s, &c);
+    cr_assert(s == 0 && signbit(s) && c == 1.0);
+    ism_sincos(0x1p-40, &s, &c);
+    cr_assert(s == 0x1p-40 && c == 1.0);
+    /* sin and cos of (k + 1/2) pi/2: (±√½, ±√½) with the signs of the quadrant */
+    const double half = sqrt(0.5);
+    const int sign_s[4] = {1, 1, -1, -1}, sign_c[4] = {1, -1, -1, 1};
+    for (int k = -8; k < 8; k++) {
+        ism_sincos((k + 0.5) * (M_PI / 2), &s, &c);
+        int q = ((k % 4) + 4) % 4;
+        cr_assert(fabs(s - sign_s[q] * half) < 1e-15 && fabs(c - sign_c[q] * half) < 1e-15,
+                  "k %d: %.17g %.17g", k, s, c);
+    }
+    test_rng r = {3};
+    for (int i = 0; i < 100000; i++) {
+        double x = test_uniform(&r, -1e4, 1e4);
+        ism_sincos(x, &s, &c);
+        cr_assert(fabs(s * s + c * c - 1) < 4e-16, "x %a", x);
+    }
+}
+
+/* Past ISM_SINCOS_LIMIT and for ±inf and NaN: libm's pair, bit for bit (NaN as NaN). */
+Test(sincos, far_and_non_finite_arguments_take_libm)
+{
+    const double xs[] = {ISM_SINCOS_LIMIT * 1.0000001, -3e7, 1e300, INFINITY, -INFINITY, NAN};
+    for (size_t i = 0; i < sizeof xs / sizeof xs[0]; i++) {
+        double s, c, ls, lc;
+        ism_sincos(xs[i], &s, &c);
+        sincos(xs[i], &ls, &lc);
+        cr_assert(isnan(ls) ? isnan(s) && isnan(c)
+                            : memcmp(&s, &ls, sizeof s) == 0 && memcmp(&c, &lc, sizeof c) == 0,
+                  "x %g: (%a, %a) vs libm (%a, %a)", xs[i], s, c, ls, lc);
+    }
+}
+
+/* Four lanes (any mix of near, far and non-finite arguments) give each lane's one-lane bits. */
+Test(sincos, four_lanes_are_each_one_lane)
+{
+    test_rng r = {11};
+    const double odd[] = {0.0, -0.0, 1e300, NAN, INFINITY, 3e6, 1.5707963267948966, -1e-300};
+    for (int i = 0; i < 200000; i++) {
+        double x[4], s4[4], c4[4];
+        for (int j = 0; j < 4; j++)
+            x[j] = i % 7 == 0 && j == i % 4 ? odd[(i / 7) % 8] : argument(&r, (size_t)(i + j));
+        v4d sv, cv;
+        ism_sincos4(v4_ld(x), &sv, &cv);
+        v4_st(s4, sv), v4_st(c4, cv);
+        for (int j = 0; j < 4; j++) {
+            double s, c;
+            ism_sincos(x[j], &s, &c);
+            cr_assert(memcmp(&s, &s4[j], sizeof s) == 0 && memcmp(&c, &c4[j], sizeof c) == 0,
+                      "lane %d, x %a", j, x[j]);
+        }
+    }
+}
+
+/* A trig surface's f by every point evaluator, bit for bit: the gyroid ball, in its box and
+ * far out (arguments up to ~2e6 and past ISM_SINCOS_LIMIT, where libm takes over). */
+Test(sincos, every_point_evaluator_gives_the_same_f)
+{
+    const test_surface *gs = test_surface_named("gyroid-ball");
+    ism_tape *t = test_surface_compile(gs);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    enum { N = 77 }; /* not a whole number of groups */
+    test_rng r = {5};
+    for (int round = 0; round < 3; round++) {
+        double scale = round == 0 ? 1 : round == 1 ? 1e5 : 1e7;
+        double x[N], y[N], z[N], fb[N], fg[N], g[N][3], fp[N], fh[N], h[N][6], p[N][3];
+        for (int i = 0; i < N; i++) {
+            x[i] = p[i][0] = scale * test_uniform(&r, gs->box[0], gs->box[3]);
+            y[i] = p[i][1] = scale * test_uniform(&r, gs->box[1], gs->box[4]);
+            z[i] = p[i][2] = scale * test_uniform(&r, gs->box[2], gs->box[5]);
+        }
+        ism_eval_batch(t, ws, x, y, z, fb, N);
+        ism_eval_points(t, ws, x, y, z, fp, N);
+        ism_eval_gradient_batch(t, ws, x, y, z, fg, g, N);
+        ism_eval_hessian_batch(t, ws, (const double(*)[3])p, fh, (double(*)[3])g, h, N);
+        for (int i = 0; i < N; i++) {
+            double one = ism_eval_point(t, ws, x[i], y[i], z[i]), gr[3], hs[6];
+            double fgs = ism_eval_gradient(t, ws, x[i], y[i], z[i], gr);
+            double fhs = ism_eval_hessian(t, ws, x[i], y[i], z[i], gr, hs);
+            const double *all[] = {&fb[i], &fp[i], &fg[i], &fh[i], &fgs, &fhs};
+            for (size_t k = 0; k < sizeof all / sizeof all[0]; k++)
+                cr_assert(memcmp(all[k], &one, sizeof one) == 0,
+                          "scale %g point %d evaluator %zu: %.17g vs one point's %.17g", scale,
+                          i, k, *all[k], one);
+        }
+    }
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
