@@ -4,7 +4,8 @@
  * ISM_SINCOS_LIMIT, and next to multiples of pi/2, where the reduction cancels); one lane and
  * four lanes bit for bit; libm's bits past the range and for non-finite arguments; and every
  * point evaluator (one point, batch, gradient, batched gradient, Hessian) of a trig surface
- * giving the same f bit for bit. */
+ * giving the same f bit for bit; the batched gradient's kept pairs serving only their own
+ * arguments. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
@@ -171,6 +172,41 @@ Test(sincos, every_point_evaluator_gives_the_same_f)
                 cr_assert(memcmp(all[k], &one, sizeof one) == 0,
                           "scale %g point %d evaluator %zu: %.17g vs one point's %.17g", scale,
                           i, k, *all[k], one);
+        }
+    }
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
+
+/* The batched gradient keeps the last registers' sines and cosines by their arguments' bits
+ * (trig_pair.h's group pairs): batches that repeat, or differ from the last in one lane by one
+ * ulp, or in their length, each still give every lane ism_eval_gradient's f and gradient bit
+ * for bit. A pair served for a near but different argument fails here. */
+Test(sincos, kept_group_pairs_serve_only_their_own_arguments)
+{
+    const test_surface *gs = test_surface_named("gyroid-ball");
+    ism_tape *t = test_surface_compile(gs);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    enum { N = ISM_GRAD_BATCH };
+    test_rng r = {9};
+    double x[N], y[N], z[N];
+    for (int i = 0; i < N; i++) {
+        x[i] = test_uniform(&r, gs->box[0], gs->box[3]);
+        y[i] = test_uniform(&r, gs->box[1], gs->box[4]);
+        z[i] = test_uniform(&r, gs->box[2], gs->box[5]);
+    }
+    for (int round = 0; round < 60; round++) {
+        size_t n = round % 3 == 0 ? N : (size_t)(1 + round % N);
+        int lane = round % N;
+        double *c = round % 3 == 0 ? x : round % 3 == 1 ? y : z;
+        if (round % 2)
+            c[lane] = nextafter(c[lane], INFINITY); /* one lane one ulp off the last batch */
+        double f[N], g[N][3];
+        ism_eval_gradient_batch(t, ws, x, y, z, f, g, n);
+        for (size_t i = 0; i < n; i++) {
+            double gs1[3], f1 = ism_eval_gradient(t, ws, x[i], y[i], z[i], gs1);
+            cr_assert(memcmp(&f1, &f[i], sizeof f1) == 0 && memcmp(gs1, g[i], sizeof gs1) == 0,
+                      "round %d lane %zu: f %.17g vs %.17g", round, i, f[i], f1);
         }
     }
     ism_eval_ws_free(ws);
