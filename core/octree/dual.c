@@ -803,9 +803,11 @@ static void place_lanes(void *ctx, size_t k, int thread)
     const int32_t *leaf = job->in;
     size_t first, n = chunk_of(k, job->n, &first);
     double lo[MEASURE_LANES][3], hi[MEASURE_LANES][3], size[MEASURE_LANES], m[MEASURE_LANES][3];
-    double a[MEASURE_LANES][3], b[MEASURE_LANES][3], sz[MEASURE_LANES];
+    /* sz and at zeroed: lane_feet reads only the first na, which gcc -O1 (the sanitizer
+     * lane) cannot see and calls maybe-uninitialized under -Werror */
+    double a[MEASURE_LANES][3], b[MEASURE_LANES][3], sz[MEASURE_LANES] = {0};
     uint8_t state[MEASURE_LANES];
-    size_t at[MEASURE_LANES], na = 0;
+    size_t at[MEASURE_LANES] = {0}, na = 0;
     for (size_t j = 0; j < n; j++) {
         const dnode *nd = &d->n[leaf[first + j]];
         corner_point(d, nd, 0, lo[j]);
