@@ -224,3 +224,51 @@ Test(crease_path, no_path_onto_an_arc_outside_the_polygon)
         }
     }
 }
+
+/* revE 1: each end of the path is checked on its own. A heptagon whose only corner inside
+ * the circle is Q (radius 0.93, angle 135°), P_b (1.37, 195°) after it, P_a (1.02, 108°)
+ * before it, four more corners at radius 1.5. The side P_a → Q runs nearly along the circle,
+ * up to 0.07 inside it, so its crease point (crease_point: the branches' gap interpolated
+ * between the corners, then Newton radially onto the circle) lies at 113.7°, 0.07 outside
+ * that side; on Q → P_b it lies at 145.0°. Their chord sags 0.037 > E/2 and its foot, the one
+ * path point (halves 0.0093), lies at 129.3°: seen from the end on Q → P_b it lies 0.045 on
+ * the inner side of that edge, from the end on P_a → Q 0.051 on the outer side of that one
+ * (a scratch model of those steps, matched by the code's own figures). So the path leaves one
+ * end inward and the other outward (a fold there); the heptagon reflected in the line at 135°
+ * (angle a → 270° − a, listed the same way round) swaps which mixed edge's end is which. In
+ * both the chord must stay: the cut's crease points are its two ends only, none between
+ * them. A check of one end that reads the other's edge, point or path end, or no check of
+ * one end, shows in one of the two. */
+Test(crease_path, no_path_that_leaves_one_end_outward)
+{
+    double offs[3][3];
+    placements(offs);
+    const double deg = M_PI / 180;
+    const double r[7] = {0.93, 1.37, 1.5, 1.5, 1.5, 1.5, 1.02};
+    const double th[7] = {135, 195, 250, 304, 359, 413, 468};
+    const double node[6] = {-1.7, -1.7, -0.1, 1.7, 1.7, 0.1};
+    for (int mirrored = 0; mirrored < 2; mirrored++) {
+        double rr[7], tt[7];
+        for (int i = 0; i < 7; i++) { /* Q first, counter-clockwise */
+            int j = mirrored && i > 0 ? 7 - i : i;
+            rr[i] = r[j];
+            tt[i] = (mirrored ? 270 - th[j] : th[j]) * deg;
+        }
+        for (int placed = 0; placed < 3; placed++) {
+            double angle[8];
+            size_t n = cut_crease_angles(rr, tt, 7, node, offs[placed], placed, angle, 8);
+            cr_expect_eq(n, 2, "mirrored %d, placement %d: %zu crease points", mirrored, placed,
+                         n);
+            if (n >= 2 && n <= 8) {
+                double a0 = fmin(angle[0], angle[1]), a1 = fmax(angle[0], angle[1]);
+                cr_expect(a0 > 90 * deg && a1 < 180 * deg && a1 - a0 > 10 * deg,
+                          "mirrored %d, placement %d: ends at %g, %g rad", mirrored, placed,
+                          angle[0], angle[1]);
+                for (size_t i = 2; i < n; i++)
+                    cr_expect(!(angle[i] > a0 && angle[i] < a1),
+                              "mirrored %d, placement %d: a crease point between the ends, at "
+                              "%g rad", mirrored, placed, angle[i]);
+            }
+        }
+    }
+}
