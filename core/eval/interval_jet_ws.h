@@ -20,6 +20,9 @@ typedef ism_interval ism_kept_vd[4];
 #define ISM_IVG_VL 4
 #define ISM_IVG_GROUPS (ISM_IVGRAD_BATCH / ISM_IVG_VL)
 #define ISM_IVG_REG (ISM_IVG_GROUPS * 8 * ISM_IVG_VL) /* doubles a register or record holds */
+/* ISM_IVG_GROUPS counts whole groups: a batch of 10 would walk a third group past a
+ * register's end. */
+_Static_assert(ISM_IVGRAD_BATCH % ISM_IVG_VL == 0, "a batch is whole groups of lanes");
 
 struct ism_ivjet_ws {
     uint32_t nregs;

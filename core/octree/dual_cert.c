@@ -414,7 +414,7 @@ bool ism_dual_over_many(const ism_dual_model *m, const double (*lo)[3], const do
                         size_t n, ism_interval *v2, ism_ivgrad *g, bool *ok)
 {
     ism_interval dx[ISM_IVGRAD_BATCH][3];
-    lane_out out[ISM_IVGRAD_BATCH / 4];
+    lane_out out[(ISM_IVGRAD_BATCH + 3) / 4]; /* many_groups: a group of 4 per started 4 */
     if (n == 0 || n > ISM_IVGRAD_BATCH)
         return false;
     for (size_t k = 0; k < n; k++)
