@@ -726,9 +726,11 @@ void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const
         v->pre_ok = ok[k];
         v->pre_model = true;
         v->pre_forms = forms && ok[k];
-        v->pre_v2 = v2[k];
-        v->pre_over = over[k];
-        v->pre_over_ok = over_ok[k];
+        if (v->pre_forms) { /* else not computed (forms false) or from a failed jet */
+            v->pre_v2 = v2[k];
+            v->pre_over = over[k];
+            v->pre_over_ok = over_ok[k];
+        }
     }
 }
 
