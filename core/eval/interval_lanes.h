@@ -4,7 +4,10 @@
  * (down1 / up1), products from their four corner products in iv_mul's order (a NaN corner,
  * 0 × inf, counted as 0), squares as iv_square. For the batched interval gradient pass
  * (eval_interval_grad_batch.c) and the dual mesher's sub-box enclosures (octree/dual_cert.c).
- * INLINE helpers only (lanes4.h's rule). */
+ * INLINE helpers only (lanes4.h's rule). Its names are unprefixed and reserved in the files
+ * that include it: the types vi, v4u; splat, pick, vabs, vdown1, vup1, vmin, vmax, vnan_to,
+ * ivz and every v_* (v_splat, v_add, v_sub, v_neg, v_mul_c, v_mul, v_square); a local helper
+ * there takes another name. */
 #ifndef ISM_INTERVAL_LANES_H
 #define ISM_INTERVAL_LANES_H
 

@@ -101,7 +101,11 @@ int ism_dual_classify(dual *d, worker *w, dnode *n, corner_view *v);
 /* After a batch of natural enclosures (kid_kinds: views[at[k]].pre_g for k < nb, classify_head
  * UNDECIDED), the Taylor models the tails of nodes kids[at[k]] will take (the same test
  * classify_tail makes before its first tighten) made at once (ism_dual_taylor_many), when
- * there are at least two; bit for bit what tighten would make. */
+ * there are at least two; bit for bit what tighten would make. With each model whose jet
+ * succeeded (pre_forms) it leaves its second-order form and enclosure over the node, taken
+ * in lanes (ism_dual_over_many: pre_v2, pre_over, pre_over_ok), bit for bit the scalar
+ * ones; the tail's node_form (empty_proven's form) and node_over (tighten's enclosure)
+ * consume them once. */
 void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const int *at,
                          int nb);
 int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v);
