@@ -38,20 +38,10 @@ typedef struct vj {
 } vj;
 _Static_assert(sizeof(vj) == 8 * VL * sizeof(double), "a group's register is 8 vectors");
 
-INLINE vi ivz(void) { return (vi){splat(0.0), splat(0.0)}; }
-
 /* is_zero: both bounds ±0 */
 INLINE v4i iz(vi u) { return (v4i)((((v4u)u.lo | (v4u)u.hi) << 1) == (v4u){0, 0, 0, 0}); }
 
 INLINE vi vpick(v4i m, vi a, vi b) { return (vi){pick(m, a.lo, b.lo), pick(m, a.hi, b.hi)}; }
-
-INLINE vi v_mul_c(vi a, double c)
-{
-    if (c == 0.0)
-        return ivz();
-    v4d k = splat(c);
-    return c > 0.0 ? (vi){vdown1(a.lo * k), vup1(a.hi * k)} : (vi){vdown1(a.hi * k), vup1(a.lo * k)};
-}
 
 INLINE vi v_div_c(vi a, double c)
 {

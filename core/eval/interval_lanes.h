@@ -47,6 +47,17 @@ INLINE vi v_add(vi a, vi b) { return (vi){vdown1(a.lo + b.lo), vup1(a.hi + b.hi)
 INLINE vi v_sub(vi a, vi b) { return (vi){vdown1(a.lo - b.hi), vup1(a.hi - b.lo)}; }
 INLINE vi v_neg(vi a) { return (vi){-a.hi, -a.lo}; }
 
+INLINE vi ivz(void) { return (vi){splat(0.0), splat(0.0)}; }
+
+/* iv_mul_c */
+INLINE vi v_mul_c(vi a, double c)
+{
+    if (c == 0.0)
+        return ivz();
+    v4d k = splat(c);
+    return c > 0.0 ? (vi){vdown1(a.lo * k), vup1(a.hi * k)} : (vi){vdown1(a.hi * k), vup1(a.lo * k)};
+}
+
 /* iv_mul: the four corner products (a NaN one, 0 × inf, as 0), min / max in min4's order */
 INLINE vi v_mul(vi a, vi b)
 {

@@ -17,12 +17,24 @@ static ism_interval meet(ism_interval a, ism_interval b)
     return iv(max_bound(a.lo, b.lo), min_bound(a.hi, b.hi));
 }
 
+/* The centre of lo..hi along a (a model's centre c, the default halving point). */
+static double centre_along(const double lo[3], const double hi[3], int a)
+{
+    return 0.5 * lo[a] + 0.5 * hi[a];
+}
+
+/* Where lo..hi is halved along a: at mid[a], or at its centre when mid is NULL. */
+static double halving_at(const double lo[3], const double *mid, const double hi[3], int a)
+{
+    return mid ? mid[a] : centre_along(lo, hi, a);
+}
+
 bool ism_dual_taylor(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                      const double hi[3], ism_dual_model *m, uint64_t *intervals)
 {
     ism_interval box[3], mid[3];
     for (int a = 0; a < 3; a++) {
-        m->c[a] = 0.5 * lo[a] + 0.5 * hi[a];
+        m->c[a] = centre_along(lo, hi, a);
         box[a] = iv(lo[a], hi[a]);
         mid[a] = iv(m->c[a], m->c[a]);
     }
@@ -41,7 +53,7 @@ bool ism_dual_taylor_many(const ism_tape *t, ism_ivjet_ws *jet, const double (*l
     for (size_t k = 0; k < n; k++) {
         ism_interval box[3];
         for (int a = 0; a < 3; a++) {
-            m[k].c[a] = 0.5 * lo[k][a] + 0.5 * hi[k][a];
+            m[k].c[a] = centre_along(lo[k], hi[k], a);
             box[a] = iv(lo[k][a], hi[k][a]);
             mid[k][a] = iv(m[k].c[a], m[k].c[a]);
         }
@@ -55,12 +67,18 @@ bool ism_dual_taylor_many(const ism_tape *t, ism_ivjet_ws *jet, const double (*l
     return true;
 }
 
+/* x − c along a over lo..hi, rounded outward. */
+static ism_interval from_centre(const ism_dual_model *m, int a, double lo, double hi)
+{
+    return iv_sub(iv(lo, hi), iv(m->c[a], m->c[a]));
+}
+
 /* x − c over lo..hi, rounded outward. */
 static void round_centre(const ism_dual_model *m, const double lo[3], const double hi[3],
                          ism_interval dx[3])
 {
     for (int a = 0; a < 3; a++)
-        dx[a] = iv_sub(iv(lo[a], hi[a]), iv(m->c[a], m->c[a]));
+        dx[a] = from_centre(m, a, lo[a], hi[a]);
 }
 
 ism_interval ism_dual_terms_quad(const ism_dual_terms *t)
@@ -140,7 +158,7 @@ static void sub_box(const double lo[3], const double *mid, const double hi[3], i
                     double sl[3], double sh[3])
 {
     for (int a = 0; a < 3; a++) {
-        double m = mid ? mid[a] : 0.5 * lo[a] + 0.5 * hi[a];
+        double m = halving_at(lo, mid, hi, a);
         sl[a] = (k >> a & 1) ? m : lo[a];
         sh[a] = (k >> a & 1) ? hi[a] : m;
     }
@@ -233,9 +251,6 @@ INLINE vi vmeet(vi a, vi b)
                 pick((a.hi <= b.hi) | (b.hi != b.hi), a.hi, b.hi)};
 }
 
-/* iv_mul_c(u, 0.5) */
-INLINE vi v_half(vi u) { return (vi){vdown1(u.lo * splat(0.5)), vup1(u.hi * splat(0.5))}; }
-
 /* Lane j: *u[j]. */
 INLINE vi gather(const ism_interval *const u[4])
 {
@@ -281,7 +296,7 @@ INLINE void lanes_encl(const vmodel *M, const vi dx[3], bool every, lane_out *ou
         f = v_add(f, v_mul(M->cd[a], dx[a]));
         for (int b = a; b < 3; b++) {
             vi h = M->h[ism_dual_hess_at(a, b)];
-            f = v_add(f, b == a ? v_half(v_mul(h, v_square(dx[a])))
+            f = v_add(f, b == a ? v_mul_c(v_mul(h, v_square(dx[a])), 0.5)
                                 : v_mul(h, v_mul(dx[a], dx[b])));
         }
     }
@@ -384,10 +399,9 @@ static void sub_encls(const ism_dual_model *m, const double lo[3], const double 
 {
     ism_interval dxh[3][2];
     for (int a = 0; a < 3; a++) {
-        double cut = mid ? mid[a] : 0.5 * lo[a] + 0.5 * hi[a];
-        ism_interval c = iv(m->c[a], m->c[a]);
-        dxh[a][0] = iv_sub(iv(lo[a], cut), c);
-        dxh[a][1] = iv_sub(iv(cut, hi[a]), c);
+        double cut = halving_at(lo, mid, hi, a);
+        dxh[a][0] = from_centre(m, a, lo[a], cut); /* round_centre's on each half */
+        dxh[a][1] = from_centre(m, a, cut, hi[a]);
     }
 #if ISM_HAVE_AVX2_CLONE
     if (ISM_RUN_AVX2()) {
