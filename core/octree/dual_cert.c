@@ -288,7 +288,8 @@ INLINE void store_lanes(vi u, ism_interval *out, size_t stride)
 }
 
 /* Four boxes' forms and enclosures (x − c over them in dx); the enclosures only when some
- * form holds 0, unless every (g undefined and ok false otherwise). */
+ * form does not keep f from 0 (holds 0, or a NaN bound), unless every (g undefined and ok
+ * false otherwise). */
 INLINE void lanes_encl(const vmodel *M, const vi dx[3], bool every, lane_out *out)
 {
     vi f = M->cv; /* second_order */
@@ -301,8 +302,10 @@ INLINE void lanes_encl(const vmodel *M, const vi dx[3], bool every, lane_out *ou
         }
     }
     store_lanes(f, out->form, sizeof(ism_interval));
-    v4i open = (v4i)(f.lo <= splat(0.0)) & (v4i)(f.hi >= splat(0.0));
-    if (!every && !(open[0] | open[1] | open[2] | open[3])) {
+    /* verdict_from's FREE test: a NaN bound keeps nothing from 0, and the scalar code then
+       takes the enclosure (its meets may give a number there) */
+    v4i kept = (v4i)(f.lo > splat(0.0)) | (v4i)(f.hi < splat(0.0));
+    if (!every && (kept[0] & kept[1] & kept[2] & kept[3])) {
         for (int j = 0; j < 4; j++) /* every form keeps f from 0: no verdict reads g */
             out->ok[j] = false;     /* (ok set all the same: a bool is passed on) */
         return;
@@ -413,10 +416,11 @@ static void sub_encls(const ism_dual_model *m, const double lo[3], const double 
 }
 
 void ism_dual_sub_encls(const ism_dual_model *m, const double lo[3], const double *mid,
-                        const double hi[3], ism_interval form[8], ism_ivgrad g[8], bool ok[8])
+                        const double hi[3], bool every, ism_interval form[8], ism_ivgrad g[8],
+                        bool ok[8])
 {
     lane_out out[2];
-    sub_encls(m, lo, mid, hi, true, out);
+    sub_encls(m, lo, mid, hi, every, out);
     for (int k = 0; k < 8; k++) {
         form[k] = out[k >> 2].form[k & 3];
         g[k] = out[k >> 2].g[k & 3];

@@ -63,10 +63,13 @@ ism_interval ism_dual_second_order(const ism_dual_model *m, const double lo[3],
 /* What the model m says of each sub-box k of lo..hi halved at mid (NULL: the centre; bit a
  * of k the upper half along a), as the proofs on the sub-boxes take it (four sub-boxes a step
  * in lanes): form[k], ism_dual_second_order's bounds on the sub-box, and g[k] / ok[k],
- * ism_dual_over's enclosure and answer there. Kept public as the unit tests' view of those
- * lanes (test_dual_cert.c: bit for bit the scalar functions on each sub-box). */
+ * ism_dual_over's enclosure and answer there. Unless every (the proofs' way), a group of
+ * sub-boxes 0-3 or 4-7 whose four forms keep f from 0 takes no enclosures: ok false there
+ * (g undefined). Kept public as the unit tests' view of those lanes (test_dual_cert.c: bit
+ * for bit the scalar functions on each sub-box). */
 void ism_dual_sub_encls(const ism_dual_model *m, const double lo[3], const double *mid,
-                        const double hi[3], ism_interval form[8], ism_ivgrad g[8], bool ok[8]);
+                        const double hi[3], bool every, ism_interval form[8], ism_ivgrad g[8],
+                        bool ok[8]);
 
 /* For each k < n (n <= ISM_IVGRAD_BATCH), on lo[k]..hi[k] by its model m[k], four boxes a
  * step in lanes: v2[k] = ism_dual_second_order's bounds, ok[k] = ism_dual_over's answer and

@@ -446,19 +446,81 @@ Test(dual_cert, halves_shown_free_are_free)
     ism_tape_free(t);
 }
 
+/* Equal bits, or both NaN (a NaN's payload is not part of the answer). */
+static bool same_bound(double a, double b)
+{
+    return memcmp(&a, &b, sizeof a) == 0 || (a != a && b != b);
+}
+
+static bool same_iv(ism_interval a, ism_interval b)
+{
+    return same_bound(a.lo, b.lo) && same_bound(a.hi, b.hi);
+}
+
+static bool same_ivgrad(const ism_ivgrad *a, const ism_ivgrad *b)
+{
+    bool same = same_iv(a->v, b->v);
+    for (int k = 0; k < 3; k++)
+        same = same && same_iv(a->d[k], b->d[k]);
+    return same;
+}
+
+/* ism_dual_sub_encls of m on lo..hi halved at mid (NULL: the centre) against the scalar
+ * functions on each sub-box: form[k] is ism_dual_second_order's bounds; with every, ok[k]
+ * and g[k] are ism_dual_over's answer and enclosure; without, the same in each group of
+ * four sub-boxes (0-3, 4-7) where some form holds 0, and ok false in the others (the skip
+ * the proofs take). Adds to *open the sub-boxes whose form holds 0, to *skipped the groups
+ * skipped. */
+static void expect_sub_encls(const ism_dual_model *m, const double lo[3], const double mid[3],
+                             const double hi[3], bool at_centre, bool every, int cell,
+                             size_t *open, size_t *skipped)
+{
+    ism_interval f[8], want[8];
+    ism_ivgrad g[8];
+    bool ok[8], held[2] = {false, false};
+    ism_dual_sub_encls(m, lo, at_centre ? NULL : mid, hi, every, f, g, ok);
+    for (int k = 0; k < 8; k++) {
+        double sl[3], sh[3];
+        halve(lo, mid, hi, k, sl, sh);
+        want[k] = ism_dual_second_order(m, sl, sh);
+        cr_assert(same_iv(f[k], want[k]), "cell %d, every %d, sub-box %d: [%a, %a] vs [%a, %a]",
+                  cell, every, k, f[k].lo, f[k].hi, want[k].lo, want[k].hi);
+        held[k >> 2] |= !(want[k].lo > 0 || want[k].hi < 0); /* NaN bounds: not kept from 0 */
+    }
+    for (int k = 0; k < 8; k++) {
+        double sl[3], sh[3];
+        halve(lo, mid, hi, k, sl, sh);
+        if (!every && !held[k >> 2]) {
+            cr_assert(!ok[k], "cell %d, sub-box %d: an enclosure in a skipped group", cell, k);
+            continue;
+        }
+        ism_ivgrad wg;
+        bool wok = ism_dual_over(m, sl, sh, &wg);
+        cr_assert_eq(ok[k], wok, "cell %d, every %d, sub-box %d", cell, every, k);
+        cr_assert(!wok || same_ivgrad(&g[k], &wg),
+                  "cell %d, every %d, sub-box %d: [%a, %a] vs [%a, %a]", cell, every, k,
+                  g[k].v.lo, g[k].v.hi, wg.v.lo, wg.v.hi);
+        *open += want[k].lo <= 0 && want[k].hi >= 0;
+    }
+    *skipped += !every && !held[0];
+    *skipped += !every && !held[1];
+}
+
 /* ism_dual_sub_encls (four sub-boxes a step in lanes, as the proofs on the sub-boxes take
  * them) gives each sub-box ism_dual_second_order's bounds and ism_dual_over's enclosure and
  * answer on its own box, to the bit: cells round the torus's tube of three sizes, on and off
  * the lattice (1e-3 and √2 − 1 of a cell), halved at the centre (NULL) and at 0.3 / 0.7 of
- * each side. A half taken for the wrong sub-box, a lane stored at the wrong place or a step
- * out of the scalar order shows as a differing bound; both answers of ism_dual_over occur
- * only where some enclosure holds 0 (counted: the sub-boxes whose form holds 0). */
+ * each side, with every enclosure taken and as the proofs take them (revE 6: a group whose
+ * four forms keep f from 0 takes none, ok false; both kinds of group counted). A half taken
+ * for the wrong sub-box, a lane stored at the wrong place or a step out of the scalar order
+ * shows as a differing bound; both answers of ism_dual_over occur only where some enclosure
+ * holds 0 (counted: the sub-boxes whose form holds 0). */
 Test(dual_cert, sub_box_forms_are_their_own_forms)
 {
     ism_tape *t = pf_compile(&pf_ring_torus);
     ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
     cr_assert(jw);
-    size_t boxes = 0, open = 0;
+    size_t boxes = 0, open = 0, skipped = 0, open_lazy = 0;
     for (int i = 0; i < 2592; i += 7) {
         double lo[3], hi[3];
         ism_dual_model m;
@@ -468,30 +530,91 @@ Test(dual_cert, sub_box_forms_are_their_own_forms)
             double mid[3], frac = at == 1 ? 0.3 : 0.7;
             for (int a = 0; a < 3; a++)
                 mid[a] = at == 0 ? 0.5 * lo[a] + 0.5 * hi[a] : lo[a] + frac * (hi[a] - lo[a]);
-            ism_interval f[8];
-            ism_ivgrad g[8];
-            bool ok[8];
-            ism_dual_sub_encls(&m, lo, at == 0 ? NULL : mid, hi, f, g, ok);
-            for (int k = 0; k < 8; k++) {
-                double sl[3], sh[3];
-                halve(lo, mid, hi, k, sl, sh);
-                ism_interval want = ism_dual_second_order(&m, sl, sh);
-                cr_assert(memcmp(&f[k], &want, sizeof want) == 0,
-                          "cell %d, halving %d, sub-box %d: [%a, %a] vs [%a, %a]", i, at, k,
-                          f[k].lo, f[k].hi, want.lo, want.hi);
-                ism_ivgrad wg;
-                bool wok = ism_dual_over(&m, sl, sh, &wg);
-                cr_assert_eq(ok[k], wok, "cell %d, halving %d, sub-box %d", i, at, k);
-                cr_assert(!wok || memcmp(&g[k], &wg, sizeof wg) == 0,
-                          "cell %d, halving %d, sub-box %d: [%a, %a] vs [%a, %a]", i, at, k,
-                          g[k].v.lo, g[k].v.hi, wg.v.lo, wg.v.hi);
-                open += want.lo <= 0 && want.hi >= 0;
-            }
+            expect_sub_encls(&m, lo, mid, hi, at == 0, true, i, &open, &skipped);
+            expect_sub_encls(&m, lo, mid, hi, at == 0, false, i, &open_lazy, &skipped);
             boxes++;
         }
     }
     cr_assert(boxes > 1000, "%zu", boxes);
     cr_assert(open > boxes, "%zu sub-boxes whose form holds 0", open);
+    cr_assert(skipped > boxes / 10 && open_lazy > boxes,
+              "%zu groups skipped, %zu sub-boxes whose form holds 0 in the others", skipped,
+              open_lazy);
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
+
+/* Model m with one bound of its 14 intervals (at.v, at.d, box.v, box.d, box.h; lo or hi by
+ * the bit 0 of which) replaced by x. */
+static void spoil(ism_dual_model *m, int which, double x)
+{
+    ism_interval *u[14];
+    int n = 0;
+    u[n++] = &m->at.v;
+    for (int a = 0; a < 3; a++)
+        u[n++] = &m->at.d[a];
+    u[n++] = &m->box.v;
+    for (int a = 0; a < 3; a++)
+        u[n++] = &m->box.d[a];
+    for (int e = 0; e < 6; e++)
+        u[n++] = &m->box.h[e];
+    ism_interval *b = u[(which >> 1) % 14];
+    if (which & 1)
+        b->hi = x;
+    else
+        b->lo = x;
+}
+
+/* revE 6: the lanes on NaN and infinite bounds (a pole's jet: 1/x, sqrt near 0), where
+ * vmeet's choice (max_bound / min_bound: the number over a NaN) and v_mul's NaN corners (as
+ * 0) decide: tube models with one bound of one interval made NaN, +inf or −inf in turn (all
+ * 28 bounds), the sub-boxes (every and as the proofs take them) and the models in groups of
+ * 1-8 (ism_dual_over_many) against ism_dual_second_order / ism_dual_over on each box, to the
+ * bit (a NaN as a NaN). Both answers of ism_dual_over occur. */
+Test(dual_cert, lanes_on_nan_and_infinite_bounds_are_the_scalar_ones)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    cr_assert(jw);
+    const double bad[3] = {NAN, INFINITY, -INFINITY};
+    size_t open = 0, skipped = 0, answers[2] = {0, 0}, models = 0;
+    for (int i = 0, spoilt = 0; i < TUBE_CELLS; i += 13) {
+        double lo[ISM_IVGRAD_BATCH][3], hi[ISM_IVGRAD_BATCH][3];
+        ism_dual_model m[ISM_IVGRAD_BATCH];
+        size_t n = (size_t)(1 + i % ISM_IVGRAD_BATCH), got = 0;
+        for (size_t k = 0; k < n; k++, spoilt++) {
+            if (!tube_model(t, jw, (i + (int)k) % TUBE_CELLS, lo[got], hi[got], &m[got]))
+                continue;
+            spoil(&m[got], spoilt % 28, bad[spoilt / 28 % 3]);
+            double mid[3];
+            for (int a = 0; a < 3; a++)
+                mid[a] = lo[got][a] + 0.3 * (hi[got][a] - lo[got][a]);
+            expect_sub_encls(&m[got], lo[got], mid, hi[got], false, true, i, &open, &skipped);
+            expect_sub_encls(&m[got], lo[got], mid, hi[got], false, false, i, &open, &skipped);
+            got++;
+        }
+        if (!got)
+            continue;
+        ism_interval v2[ISM_IVGRAD_BATCH];
+        ism_ivgrad over[ISM_IVGRAD_BATCH];
+        bool over_ok[ISM_IVGRAD_BATCH];
+        cr_assert(ism_dual_over_many(m, (const double (*)[3])lo, (const double (*)[3])hi, got,
+                                     v2, over, over_ok));
+        for (size_t k = 0; k < got; k++) {
+            ism_interval f = ism_dual_second_order(&m[k], lo[k], hi[k]);
+            cr_assert(same_iv(v2[k], f), "cells from %d, box %zu: form [%a, %a] vs [%a, %a]", i,
+                      k, v2[k].lo, v2[k].hi, f.lo, f.hi);
+            ism_ivgrad g1;
+            bool ok1 = ism_dual_over(&m[k], lo[k], hi[k], &g1);
+            cr_assert_eq(over_ok[k], ok1, "cells from %d, box %zu", i, k);
+            cr_assert(!ok1 || same_ivgrad(&over[k], &g1), "cells from %d, box %zu: enclosure",
+                      i, k);
+            answers[ok1]++;
+            models++;
+        }
+    }
+    cr_assert(models > 500 && answers[0] > 0 && answers[1] > 0,
+              "%zu models: %zu refused, %zu enclosed", models, answers[0], answers[1]);
     ism_ivjet_ws_free(jw);
     ism_tape_free(t);
 }
