@@ -346,11 +346,11 @@ static void corners_task(void *ctx, size_t k, int thread)
             at[a][i] = parent->o.v[a] + i * half;
             x[a][i] = ism_grid_coord(&d->g, a, at[a][i]);
         }
-    for (int j = 0, k = 0; k < 3; k++) /* x fastest, as SPLIT_OFF reads them */
+    for (int j = 0, z = 0; z < 3; z++) /* x fastest, as SPLIT_OFF reads them */
         for (int i = 0; i < 3; i++)
             for (int h = 0; h < 3; h++, j++) {
-                int32_t qj[3] = {at[0][h], at[1][i], at[2][k]};
-                double pj[3] = {x[0][h], x[1][i], x[2][k]};
+                int32_t qj[3] = {at[0][h], at[1][i], at[2][z]};
+                double pj[3] = {x[0][h], x[1][i], x[2][z]};
                 memcpy(q[j], qj, sizeof qj);
                 memcpy(in->p[j], pj, sizeof pj);
             }
