@@ -80,11 +80,12 @@ static void set_grid(dual *d, const double box[6], int depth)
     d->finest_step = min_of(d->g.step[0], min_of(d->g.step[1], d->g.step[2]));
 }
 
-/* f and the unit gradients at the lattice points q[0..n) (n <= 27), at p (their coordinates,
- * given), into f and g (f 0 where its sign is rounding noise: ism_sample_zero_by_rounding), through the point memo, as
- * neighbouring nodes share corners (a split's 27 points hold the parent's 8 and the 18 on
- * its faces and edges that the neighbours' splits sample too): ism_point_memo_many, the memo
- * as one point at a time leaves it, the misses' values in one batch. */
+/* f and the unit gradients at the lattice points q[0..n) (n <= 27), at p (their
+ * coordinates, given), into f and g (f 0 where its sign is rounding noise:
+ * ism_sample_zero_by_rounding), through the point memo, as neighbouring nodes share corners
+ * (a split's 27 points hold the parent's 8 and the 18 on its faces and edges that the
+ * neighbours' splits sample too): ism_point_memo_many, the memo as one point at a time
+ * leaves it, the misses' values in one batch. */
 static void sample_points(dual *d, worker *w, const int32_t (*q)[3], size_t n, double *f,
                           double (*p)[3], double (*g)[3])
 {
@@ -233,23 +234,23 @@ static bool batch_judged(const dual *d, int parent_level)
 }
 
 /* Bit c: child c's box is free of f = 0 by the natural interval of f over it (p: the 27
- * points in corners_task's order; neg27 bit j: f < 0 at point j). One batch of eight boxes (ism_eval_interval_batch) costs
- * less than one box's interval alone — callgrind, per call: torus 912 instructions for the
- * batch, 644 for one value, 1,947 for one value with ∇f; kummer's quartic 1,602 / 1,286 /
- * 4,330 — and the proofs of a child whose corners share a sign began with f and ∇f's
- * natural enclosure, whose value alone shows most such children empty (kummer-16-nodes at
- * 1e-2: 31,300 of 43,522; the torus, whose natural interval is wide: 136 of 1,008).
- * Only when some child has corners of one sign (the others' intervals hold 0), and past
- * min_depth only while the batches pay (d->batch_on, counted there alone); above min_depth
- * always: a child shown free there is an empty leaf, its whole subtree down to min_depth
- * never made, so a batch there spares up to 8^(min_depth - level) nodes where batch_on
- * weighs one split's proofs (sphere at 1e-2: 32 of the 64 level-2 nodes, 256 level-3 nodes
- * and their corners spared, −7.1% of the run; the torus's natural interval there frees
- * none at depth.min 3, +0.05%). At depth.min 5 (at most 1 + 8 + ... + 4,096 batches) it
- * pays more: isomesh --surface S -d 5:10 --max-error E --threads 1 under callgrind
- * --toggle-collect=ism_polygonise, batches above depth.min always against gated by batch_on
- * past it alone: torus 0.0141 74.3M against 108.7M, kummer-16-nodes 1e-2 1,127.8M against
- * 1,169.5M, the same meshes. *batched tells whether one was made. */
+ * points in corners_task's order; neg27 bit j: f < 0 at point j). One batch of eight boxes
+ * (ism_eval_interval_batch) costs less than one box's interval alone — callgrind, per call:
+ * torus 912 instructions for the batch, 644 for one value, 1,947 for one value with ∇f;
+ * kummer's quartic 1,602 / 1,286 / 4,330 — and the proofs of a child whose corners share a
+ * sign began with f and ∇f's natural enclosure, whose value alone shows most such children
+ * empty (kummer-16-nodes at 1e-2: 31,300 of 43,522; the torus, whose natural interval is
+ * wide: 136 of 1,008). Only when some child has corners of one sign (the others' intervals
+ * hold 0), and past min_depth only while the batches pay (d->batch_on, counted there
+ * alone); above min_depth always: a child shown free there is an empty leaf, its whole
+ * subtree down to min_depth never made, so a batch there spares up to 8^(min_depth - level)
+ * nodes where batch_on weighs one split's proofs (sphere at 1e-2: 32 of the 64 level-2
+ * nodes, 256 level-3 nodes and their corners spared, −7.1% of the run; the torus's natural
+ * interval there frees none at depth.min 3, +0.05%). At depth.min 5 (at most 1 + 8 + ... +
+ * 4,096 batches) it pays more: isomesh --surface S -d 5:10 --max-error E --threads 1 under
+ * callgrind --toggle-collect=ism_polygonise, batches above depth.min always against gated
+ * by batch_on past it alone: torus 0.0141 74.3M against 108.7M, kummer-16-nodes 1e-2
+ * 1,127.8M against 1,169.5M, the same meshes. *batched tells whether one was made. */
 static uint8_t children_free(const dual *d, worker *w, const dnode *parent, uint32_t neg27,
                              const double (*p)[3], bool *batched)
 {
@@ -713,15 +714,16 @@ static void roots_mean(const dual *d, const dnode *n, const double lo[3], const 
         m[a] = roots ? m[a] / roots : 0.5 * lo[a] + 0.5 * hi[a];
 }
 
-/* Leaf i's vertex into pos[3 vert]: its centre moved onto f = 0 by Newton when that lands in
- * the leaf's closed box, else the mean of its edges' secant roots so moved (the exact roots
- * would cost a fifth of the whole mesh for a start point Newton forgets); then along ∇f by
- * the balanced straddle share (straddle.h: the full 0.9 E where the surface bends one way,
- * E (l1 + l2) / (l1 - l2) at saddles; torus raw triangles 1e-2 / 3e-3 / 1e-3 3,536 / 5,792 /
- * 17,472 -> 2,872 / 4,560 / 18,048, the sphere's unchanged). The centre's foot spaces the vertices about a leaf apart where the
- * roots' mean bunches them toward the leaf's crossed corner (edges up to two leaves long):
- * raw triangles sphere 1e-2 / 3e-3 / 1e-3 1,068 / 3,496 / 8,556 -> 828 / 3,108 / 8,220,
- * torus 3,280 / 5,968 / 20,464 -> 3,536 / 5,792 / 17,472 (-9% over the six). */
+/* Leaf i's vertex into pos[3 vert]: its centre moved onto f = 0 by Newton when that lands
+ * in the leaf's closed box, else the mean of its edges' secant roots so moved (the exact
+ * roots would cost a fifth of the whole mesh for a start point Newton forgets); then along
+ * ∇f by the balanced straddle share (straddle.h: the full 0.9 E where the surface bends one
+ * way, E (l1 + l2) / (l1 - l2) at saddles; torus raw triangles 1e-2 / 3e-3 / 1e-3
+ * 3,536 / 5,792 / 17,472 -> 2,872 / 4,560 / 18,048, the sphere's unchanged). The centre's
+ * foot spaces the vertices about a leaf apart where the roots' mean bunches them toward the
+ * leaf's crossed corner (edges up to two leaves long): raw triangles sphere
+ * 1e-2 / 3e-3 / 1e-3 1,068 / 3,496 / 8,556 -> 828 / 3,108 / 8,220, torus
+ * 3,280 / 5,968 / 20,464 -> 3,536 / 5,792 / 17,472 (-9% over the six). */
 static void place_vertex(dual *d, worker *w, int32_t i)
 {
     const dnode *n = &d->n[i];
