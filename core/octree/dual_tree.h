@@ -63,9 +63,11 @@ typedef struct quads {
 
 /* The tree walk's calls put off to the pool in the last round, and their quads
  * (ism_dual_make_quads): a call whose nodes' subtrees have not changed since gives the same quads
- * again. Its quads are a second copy of the round's deferred quads beside d->q, so a round
- * holds up to twice the quads, bounded as they are by max_triangles (checked after each
- * round's triangles); run frees it once the rounds end. */
+ * again. Its quads are a second copy of the round's deferred quads beside d->q. While
+ * dual_walk.c's join_parts joins a round's parts it holds the threads' scratch quads, the last
+ * round's memo, the new memo and d->q at once: up to about four times the deferred quads,
+ * each bounded by max_triangles (checked after each round's triangles); between rounds the
+ * memo and d->q, twice. run frees it once the rounds end. */
 typedef struct walk_memo {
     struct walk_call *calls;
     uint32_t *q;  /* the calls' quads, 4 vertices each, call by call */
