@@ -60,7 +60,9 @@
  * crease the short steps are kept everywhere: 0.15 away from the locked crease vertices
  * alone took three-balls' own and 1e-3 boxes from 11.9° and 11.7° to a free 8.7° and 8.4°
  * needle. Without a bound too (the depth path, not swept): there the rule left a needle on
- * Steiner's double line (test_remesh_needles' steiner_no_needle_on_the_double_lines). */
+ * Steiner's double line (test_remesh_needles' steiner_no_needle_on_the_double_lines). Nor
+ * within rm_relax.c's ISM_RM_FAR_POINT_EDGES mean edges of a given singular point (the cusp's
+ * cone). */
 #define ISM_RM_FAR_STEP 0.15
 
 void ism_remesh_renumber_free(ism_remesh_renumber *ren)

@@ -130,8 +130,10 @@ typedef struct rm_pass {
                                not tried (rm_relax_vertex; 0: every one) */
     double relax_far_step;  /* the same for a vertex no corner of whose fan is locked,
                                with no needle among the triangles at those corners (two
-                               rings of triangles; rm_relax_vertex; at least
-                               relax_min_step) */
+                               rings of triangles) and farther than
+                               ISM_RM_FAR_POINT_EDGES mean edges from every given point
+                               (rm_relax.c's far_from_points; rm_relax_vertex; remesh.c's
+                               ISM_RM_FAR_STEP; at least relax_min_step) */
     const double *points;   /* the given singular points (3 per point: ism_remesh_options'
                                locked_points), near which no vertex takes the far step */
     size_t npoints;
