@@ -370,7 +370,7 @@ static bool idle(rm_pass *p, uint32_t v)
 }
 
 /* Within this many of its fan's mean edges of a given singular point a vertex keeps the
- * least step (ISM_RM_MIN_STEP), not the far one: beside a cusp the vertices two rings and
+ * least step (ISM_RM_MIN_STEP), not the far one (remesh.c's ISM_RM_FAR_STEP): beside a cusp the vertices two rings and
  * more out, which far_from_features lets take the far step, lie on a tube a few edges
  * across, and their longer idle steps left a needle in the tube (cusp-a2, 1e-3 box: 8.27°,
  * 0.007-0.014 from the cusp) whose merge into the cusp (rm_horn.c) made its cone 1.66°
@@ -382,7 +382,7 @@ static bool idle(rm_pass *p, uint32_t v)
 /* No vertex of v's fan is locked and no triangle with a corner there is under
  * ISM_RM_INSERT_DEG (two rings of triangles round v): v lies more than a ring away from
  * every protected vertex (point, crease, boundary) and no needle lies among those triangles,
- * where remesh.c's ISM_RM_FAR_STEP is v's least step. */
+ * where remesh.c's ISM_RM_FAR_STEP is v's least step (when far_from_points too). */
 static bool far_from_features(rm_pass *p, uint32_t v)
 {
     const rm_mesh *r = &p->r;
@@ -402,7 +402,10 @@ static bool far_from_features(rm_pass *p, uint32_t v)
 }
 
 /* v lies farther than ISM_RM_FAR_POINT_EDGES × its fan's mean edge from every given
- * singular point. */
+ * singular point. O(points) a call, asked last (only of a vertex that would otherwise take
+ * the far step); the points have no cap of their own (the locus's, bounded only by its
+ * candidate-box budget max_boxes; the presets 1-16), the same order as rm_lock_vertices'
+ * rm_point_vertex, which scans every vertex for each point at each locking. */
 static bool far_from_points(const rm_pass *p, uint32_t v, double mean_edge)
 {
     for (size_t i = 0; i < p->npoints; i++)
@@ -412,7 +415,8 @@ static bool far_from_points(const rm_pass *p, uint32_t v, double mean_edge)
 }
 
 /* Whether v's step d (its fan f) is too short to try: under the least step (relax_min_step,
- * or relax_far_step away from features) × the fan's mean edge, with no needle in its fan. */
+ * or relax_far_step away from features and given points) × the fan's mean edge, with no
+ * needle in its fan. */
 static bool step_too_short(rm_pass *p, uint32_t v, const double d[3], const rm_fan *f)
 {
     double d2 = ism_dot3(d, d), e2 = f->mean_edge * f->mean_edge;
