@@ -714,63 +714,6 @@ static void roots_mean(const dual *d, const dnode *n, const double lo[3], const 
         m[a] = roots ? m[a] / roots : 0.5 * lo[a] + 0.5 * hi[a];
 }
 
-/* Leaf i's vertex into pos[3 vert]: its centre moved onto f = 0 by Newton when that lands
- * in the leaf's closed box, else the mean of its edges' secant roots so moved (the exact
- * roots would cost a fifth of the whole mesh for a start point Newton forgets); then along
- * ∇f by the balanced straddle share (straddle.h: the full 0.9 E where the surface bends one
- * way, E (l1 + l2) / (l1 - l2) at saddles; torus raw triangles 1e-2 / 3e-3 / 1e-3
- * 3,536 / 5,792 / 17,472 -> 2,872 / 4,560 / 18,048, the sphere's unchanged). The centre's
- * foot spaces the vertices about a leaf apart where the roots' mean bunches them toward the
- * leaf's crossed corner (edges up to two leaves long): raw triangles sphere
- * 1e-2 / 3e-3 / 1e-3 1,068 / 3,496 / 8,556 -> 828 / 3,108 / 8,220, torus
- * 3,280 / 5,968 / 20,464 -> 3,536 / 5,792 / 17,472 (-9% over the six). */
-static void place_vertex(dual *d, worker *w, int32_t i)
-{
-    const dnode *n = &d->n[i];
-    double m[3], lo[3], hi[3], size = ism_grid_cell_size(&d->g, n->level);
-    corner_point(d, n, 0, lo);
-    corner_point(d, n, 7, hi);
-    if (n->kind == DN_CREASE && (ism_dual_crease_vertex(&w->s, lo, hi, m) ||
-                                 ism_dual_crease_near(&w->s, lo, hi, m))) {
-        memcpy(&d->pos[3 * n->vert], m, sizeof m); /* on the crease, as classify found it */
-        return;
-    }
-    if (n->kind == DN_PAIR) {
-        double p[8][3];
-        for (int c = 0; c < 8; c++)
-            corner_point(d, n, c, p[c]);
-        for (int k = 0; k < 2; k++) {
-            ism_dual_pair_vertex(&w->s, (const double (*)[3])p, n->f, k, m);
-            memcpy(&d->pos[3 * (k ? n->vert2 : n->vert)], m, sizeof m);
-        }
-        return;
-    }
-    if (n->placed == FOOT_AT) { /* sag_split made it as below */
-        memcpy(&d->pos[3 * n->vert], d->at[i], sizeof m);
-        return;
-    }
-    if (n->placed == FOOT_OUT || !ism_dual_foot_in_node(w, lo, hi, size, m)) {
-        roots_mean(d, n, lo, hi, m);
-        ism_dual_newton_onto(w, m, size);
-    }
-    double q[3];
-    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q, NULL))
-        memcpy(m, q, sizeof m);
-    memcpy(&d->pos[3 * n->vert], m, sizeof m);
-}
-
-static void vertex_task(void *ctx, size_t k, int thread)
-{
-    task_ctx *job = ctx;
-    place_vertex(job->d, &job->d->w[thread], ((const int32_t *)job->in)[k]);
-}
-
-/* Is leaf n's vertex one place_lanes makes (a plain leaf's that sag_split did not make)? */
-static bool placed_in_lanes(const dnode *n)
-{
-    return n->kind == DN_SURF && n->placed != FOOT_AT;
-}
-
 /* ism_dual_feet_in_nodes of the na boxes lo[i]..hi[i] (side size[i]) into m[at[i]] and, state
  * not NULL, state[at[i]]. */
 static void lane_feet(worker *w, const double (*lo)[3], const double (*hi)[3],
@@ -789,21 +732,27 @@ static void lane_feet(worker *w, const double (*lo)[3], const double (*hi)[3],
     }
 }
 
-/* Task k (job: in the leaves, all placed_in_lanes; n how many): place_vertex for leaves
- * in[MEASURE_LANES k ..], each step in lanes and bit for bit its own: the centres' feet not
- * taken yet (ism_dual_feet_in_nodes), then Newton from the secant roots' mean for those whose
- * foot left the leaf (ism_dual_feet_in_nodes again, each box the one point, its centre: the
- * same steps as ism_dual_newton_onto's, the box's verdict unread), then f's jets at the
- * points in one batch for the straddle move (ism_eval_hessian_batch, as feet_task's). One by
- * one, Newton's gradients and the Hessian cost ~1,040 instructions each a leaf (sphere at
- * 0.00714: 120 leaves whose foot left them). */
-static void place_lanes(void *ctx, size_t k, int thread)
+/* The vertices of the plain leaves leaf[0..n) (n <= MEASURE_LANES; none a pair, none whose
+ * vertex sag_split made, none a crease leaf whose crease point was found) into pos: the
+ * leaf's centre moved onto f = 0 by Newton when that lands in the leaf's closed box, else
+ * the mean of its edges' secant roots so moved (the exact roots would cost a fifth of the
+ * whole mesh for a start point Newton forgets); then along ∇f by the balanced straddle share
+ * (straddle.h: the full 0.9 E where the surface bends one way, E (l1 + l2) / (l1 - l2) at
+ * saddles; torus raw triangles 1e-2 / 3e-3 / 1e-3 3,536 / 5,792 / 17,472 -> 2,872 / 4,560 /
+ * 18,048, the sphere's unchanged). The centre's foot spaces the vertices about a leaf apart
+ * where the roots' mean bunches them toward the leaf's crossed corner (edges up to two
+ * leaves long): raw triangles sphere 1e-2 / 3e-3 / 1e-3 1,068 / 3,496 / 8,556 -> 828 /
+ * 3,108 / 8,220, torus 3,280 / 5,968 / 20,464 -> 3,536 / 5,792 / 17,472 (-9% over the six).
+ * The one routine for these steps, each in lanes: the centres' feet not taken yet
+ * (ism_dual_feet_in_nodes), then Newton from the secant roots' mean for those whose foot
+ * left the leaf (ism_dual_feet_in_nodes again, each box the one point, its centre: the box's
+ * verdict unread; ism_dual_newton_onto where a subnormal coordinate is not its box's
+ * centre), then f's jets at the points in one batch for the straddle move
+ * (ism_eval_hessian_batch, as feet_task's). One by one, Newton's gradients and the Hessian
+ * cost ~1,040 instructions each a leaf (sphere at 0.00714: 120 leaves whose foot left
+ * them). */
+static void place_plain(dual *d, worker *w, const int32_t *leaf, size_t n)
 {
-    task_ctx *job = ctx;
-    dual *d = job->d;
-    worker *w = &d->w[thread];
-    const int32_t *leaf = job->in;
-    size_t first, n = chunk_of(k, job->n, &first);
     double lo[MEASURE_LANES][3], hi[MEASURE_LANES][3], size[MEASURE_LANES], m[MEASURE_LANES][3];
     /* sz and at zeroed: lane_feet reads only the first na, which gcc -O1 (the sanitizer
      * lane) cannot see and calls maybe-uninitialized under -Werror */
@@ -811,7 +760,7 @@ static void place_lanes(void *ctx, size_t k, int thread)
     uint8_t state[MEASURE_LANES];
     size_t at[MEASURE_LANES] = {0}, na = 0;
     for (size_t j = 0; j < n; j++) {
-        const dnode *nd = &d->n[leaf[first + j]];
+        const dnode *nd = &d->n[leaf[j]];
         corner_point(d, nd, 0, lo[j]);
         corner_point(d, nd, 7, hi[j]);
         size[j] = ism_grid_cell_size(&d->g, nd->level);
@@ -828,7 +777,7 @@ static void place_lanes(void *ctx, size_t k, int thread)
     for (size_t j = 0; j < n; j++) {
         if (state[j] == FOOT_AT)
             continue;
-        roots_mean(d, &d->n[leaf[first + j]], lo[j], hi[j], m[j]);
+        roots_mean(d, &d->n[leaf[j]], lo[j], hi[j], m[j]);
         bool centre = true; /* the one point's box has it as its centre (not so when subnormal) */
         for (int c = 0; c < 3; c++)
             centre &= 0.5 * m[j][c] + 0.5 * m[j][c] == m[j][c];
@@ -853,7 +802,60 @@ static void place_lanes(void *ctx, size_t k, int thread)
         }
     }
     for (size_t j = 0; j < n; j++)
-        memcpy(&d->pos[3 * (size_t)d->n[leaf[first + j]].vert], m[j], sizeof m[j]);
+        memcpy(&d->pos[3 * (size_t)d->n[leaf[j]].vert], m[j], sizeof m[j]);
+}
+
+/* Task k (job: in the leaves, all placed_in_lanes; n how many): place_plain for leaves
+ * in[MEASURE_LANES k ..]. */
+static void place_lanes(void *ctx, size_t k, int thread)
+{
+    task_ctx *job = ctx;
+    size_t first, n = chunk_of(k, job->n, &first);
+    place_plain(job->d, &job->d->w[thread], (const int32_t *)job->in + first, n);
+}
+
+/* Leaf i's vertex into pos[3 vert]: a crease leaf's on its crease where classify's search
+ * finds it, a pair's two, the one sag_split made; else place_plain's (a crease leaf whose
+ * crease point was not found: one lane; the plain leaves go to place_plain through
+ * place_lanes, MEASURE_LANES at a time). */
+static void place_vertex(dual *d, worker *w, int32_t i)
+{
+    const dnode *n = &d->n[i];
+    double m[3], lo[3], hi[3];
+    corner_point(d, n, 0, lo);
+    corner_point(d, n, 7, hi);
+    if (n->kind == DN_CREASE && (ism_dual_crease_vertex(&w->s, lo, hi, m) ||
+                                 ism_dual_crease_near(&w->s, lo, hi, m))) {
+        memcpy(&d->pos[3 * n->vert], m, sizeof m); /* on the crease, as classify found it */
+        return;
+    }
+    if (n->kind == DN_PAIR) {
+        double p[8][3];
+        for (int c = 0; c < 8; c++)
+            corner_point(d, n, c, p[c]);
+        for (int k = 0; k < 2; k++) {
+            ism_dual_pair_vertex(&w->s, (const double (*)[3])p, n->f, k, m);
+            memcpy(&d->pos[3 * (k ? n->vert2 : n->vert)], m, sizeof m);
+        }
+        return;
+    }
+    if (n->placed == FOOT_AT) { /* sag_split made it as below */
+        memcpy(&d->pos[3 * n->vert], d->at[i], sizeof m);
+        return;
+    }
+    place_plain(d, w, &i, 1); /* a crease leaf whose crease point was not found */
+}
+
+static void vertex_task(void *ctx, size_t k, int thread)
+{
+    task_ctx *job = ctx;
+    place_vertex(job->d, &job->d->w[thread], ((const int32_t *)job->in)[k]);
+}
+
+/* Is leaf n's vertex one place_lanes makes (a plain leaf's that sag_split did not make)? */
+static bool placed_in_lanes(const dnode *n)
+{
+    return n->kind == DN_SURF && n->placed != FOOT_AT;
 }
 
 /* Room for n more vertices (positions and leaves); false when out of memory. */
