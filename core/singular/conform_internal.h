@@ -40,7 +40,8 @@ typedef struct cf_tgrid {
     size_t ntris;           /* triangles known: 0 .. ntris-1 */
     size_t base;            /* triangles 0 .. base-1 are the mesh's at cf_tgrid_init */
     double cover[6];        /* every one of those whose box meets this box is filed */
-    size_t cover_passes;    /* passes over them that filed more */
+    size_t cover_passes;    /* passes over them (cf_tgrid_cover's, counted as each starts,
+                               whether or not it files anything) */
     int threads;            /* threads of those passes (1: the calling thread alone) */
     size_t per_level[CF_TGRID_LEVELS];
 } cf_tgrid;
@@ -256,9 +257,11 @@ void cf_tgrid_free(cf_tgrid *g);
 bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t);
 /* Makes sure every triangle whose box meets the box [lo, hi] is filed: when that box is not
  * covered yet, one pass over the mesh's first `base` triangles files those meeting it grown
- * by `ahead` on every side (room for the next widenings of a cut). cf_tgrid_gather covers its
- * query box itself (ahead 0); a caller that knows the region its next queries need asks for
- * it first (a query not covered costs a pass of its own). False when out of memory. */
+ * by `ahead` on every side (room for the next widenings of a cut), and once COVER_PLAIN_PASSES
+ * passes came before, by at least COVER_GROWTH times the covered box's largest side
+ * (conform_grid.c). cf_tgrid_gather covers its query box itself (ahead 0, so grown only by
+ * that); a caller that knows the region its next queries need asks for it first (a query not
+ * covered costs a pass of its own). False when out of memory. */
 bool cf_tgrid_cover(cf_tgrid *g, const ism_mesh *m, const double lo[3], const double hi[3],
                     double ahead);
 /* Forgets the triangles from ntris on (filed last, forgotten first). */
