@@ -173,13 +173,13 @@ static bool box_inside(const double lo[3], const double hi[3], const double box[
 
 /* A widening reaches at least this share of the covered box's largest side beyond the box
  * asked for: each pass costs a look at every vertex and triangle, and a locus spread over the
- * mesh widened the box by one small query at a time (Barth's sextic at E 0.0259: 30 singular
- * points, 28 passes, 38M of its 1,444M instructions). Each pass then files what it reaches,
- * and which triangles a query gathers does not change, only the order they were filed in:
- * the cutter's queries sort what they gather, the longest edge is a maximum; the pinch
- * untangling's list (conform_refine.c) keeps the gather order, which can change only where
- * more than COVER_PLAIN_PASSES widenings came before (mesh_identity's 217 runs identical even
- * growing from the first pass). */
+ * mesh widened the box by one small query at a time (Barth's sextic at E 0.0259 before the
+ * growth: 30 singular points, 28 passes, 38M of its 1,444M instructions). Each pass then
+ * files what it reaches, and which triangles a query gathers does not change, only the order
+ * they were filed in: the cutter's queries sort what they gather, the longest edge is a
+ * maximum; the pinch untangling's list (conform_refine.c) keeps the gather order, which can
+ * change only at a pass that COVER_PLAIN_PASSES passes came before (mesh_identity's 217 runs
+ * identical even growing from the first pass). */
 #define COVER_GROWTH 0.5
 /* ... from this many passes on: a locus of a few parts (cross-cap's two pinch points and its
  * double line) is covered in a few passes, and a grown box would file triangles no query
@@ -208,8 +208,7 @@ static void outcode_block(void *ctx, size_t blk, int thread)
     (void)thread;
     const cover_pass *c = ctx;
     /* want and the bounds in locals: the byte stores to out may alias anything, so read
-       through c each vertex re-loaded them (Barth's sextic at E 0.0259: 68 instructions a
-       vertex, 43.4M over its 28 passes) */
+       through c each vertex re-loaded them (68 instructions a vertex before) */
     double w[6];
     memcpy(w, c->want, sizeof w);
     const double *pos = c->m->pos;
