@@ -31,6 +31,7 @@ ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
     ws->kept = ism_line_alloc((t->len ? t->len : 1) * sizeof *ws->kept);
     ws->kept_t = NULL;
     ws->kept_ok = false;
+    ws->last_t = NULL;
     ws->lane_regs = ws->lane_kept = NULL;
     ws->lane_cap = 0;
     ws->lane_t = NULL;
@@ -439,16 +440,24 @@ static int decided_branch(const ism_instr *in, ism_interval a, ism_interval b)
 
 /* min, max, abs: the value is always the natural enclosure; the derivatives are those of
  * the decided (or forced) branch, the whole line at a free kink. Returns 1 at a free kink. */
+/* The second operand of a min/max/abs: its register (RR), or cst filled as the constant
+ * (RC: the immediate, partials 0), or cst all 0 (abs, which reads none). */
+static const ism_ivjet *branch_b(const ism_instr *in, const ism_ivjet *r, ism_ivjet *cst)
+{
+    if (in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR)
+        return &r[in->b];
+    *cst = (ism_ivjet){ 0 };
+    if (in->op != ISM_OP_ABS)
+        cst->v = ivc(in->imm);
+    return cst;
+}
+
 static int op_branch(ism_ivjet *o, const ism_instr *in, const ism_ivjet *r, uint8_t force,
                      unsigned w)
 {
     const ism_ivjet *a = &r[in->a];
-    ism_ivjet cst = { 0 };
-    const ism_ivjet *b = &cst;
-    if (in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR)
-        b = &r[in->b];
-    else if (in->op != ISM_OP_ABS)
-        cst.v = ivc(in->imm);
+    ism_ivjet cst;
+    const ism_ivjet *b = branch_b(in, r, &cst);
     switch (in->op) {
     case ISM_OP_MIN_RR: case ISM_OP_MIN_RC: o->v = iv_min(a->v, b->v); break;
     case ISM_OP_MAX_RR: case ISM_OP_MAX_RC: o->v = iv_max(a->v, b->v); break;
@@ -658,6 +667,8 @@ static size_t run_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval bo
             kinks[i] = (uint8_t)kink;
     }
     *out = r[t->result];
+    ws->last_t = !second && !force ? t : NULL;
+    memcpy(ws->last_box, box, sizeof ws->last_box);
     return nkinks;
 }
 
@@ -806,6 +817,7 @@ static size_t hess_only(const ism_tape *t, ism_ivjet_ws *ws, const kept_rec *kep
 {
     const unsigned all = want_of(7u, 1, false);
     ism_ivjet *r = ws->r;
+    ws->last_t = NULL;
     load_box(r, box, all);
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];
@@ -905,23 +917,20 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
     return run_jet(t, ws, box, force, kinks, out);
 }
 
-/* Whether some bound of g is NaN. */
-static bool ivgrad_nan(const ism_ivgrad *g)
-{
-    bool bad = isnan(g->v.lo) || isnan(g->v.hi);
-    for (int k = 0; k < 3; k++)
-        bad |= isnan(g->d[k].lo) || isnan(g->d[k].hi);
-    return bad;
-}
-
 /* The forced pass differs from the unforced one only at the forced instruction (the ones
  * before it read their force byte only at a kink, and it is free only there), and there
  * op_branch keeps the natural enclosure as the value and copies the branch's partials
- * (take_derivs; sanitize then changes nothing, no bound being NaN): what the unforced pass
- * left in the operands' registers, when t ends there and nothing overwrote them. */
-bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, ism_ivgrad piece[2])
+ * (take_derivs; sanitize then changes nothing): what the unforced pass left in the operands'
+ * registers, when t ends there and nothing overwrote them. No bound read can be NaN: run
+ * sanitized every register it wrote, and kept the partials outside an instruction's want at
+ * 0, so no test for one here. */
+bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, const ism_interval box[3],
+                          ism_ivgrad piece[2])
 {
     if (!ws || !t || t->len == 0 || ws->nregs < t->nregs)
+        return false;
+    /* the registers are the unforced gradient pass of t over this box */
+    if (ws->last_t != t || !same_box(box, ws->last_box))
         return false;
     const ism_instr *in = &t->code[t->len - 1];
     bool rr = in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR;
@@ -931,22 +940,14 @@ bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, ism_ivgrad 
     if (in->free_of != 0 || in->out != t->result || in->out == in->a ||
         (rr && in->out == in->b))
         return false;
-    const ism_ivjet *a = &ws->r[in->a];
-    ism_ivjet cst = { 0 }; /* op_branch's constant operand: its partials 0 */
-    const ism_ivjet *b = &cst;
-    if (rr)
-        b = &ws->r[in->b];
-    else
-        cst.v = ivc(in->imm);
-    if (decided_branch(in, a->v, b->v) != ISM_BRANCH_FREE)
+    ism_ivjet cst;
+    const ism_ivjet *src[2] = { &ws->r[in->a], branch_b(in, ws->r, &cst) };
+    if (decided_branch(in, src[0]->v, src[1]->v) != ISM_BRANCH_FREE)
         return false;
-    const ism_ivjet *src[2] = { a, b };
     for (int p = 0; p < 2; p++) {
         piece[p].v = ws->r[in->out].v;
         _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
             piece[p].d[k] = src[p]->d[k];
-        if (ivgrad_nan(&piece[p]))
-            return false;
     }
     return true;
 }

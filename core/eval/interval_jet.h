@@ -46,15 +46,17 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws);
 size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out);
 
-/* Right after an ism_eval_interval_grad of t on ws with no branch forced, where t ends in a
- * min or max of two registers (or of a register and a constant) that depends on all of x, y
- * and z, and whose two branches the box allows (a free kink): f and ∇f over the same box with
- * that last instruction forced onto branch A (piece[0]) and onto B (piece[1]), bit for bit
- * what ism_eval_interval_grad with that force gives, read from the registers the pass left
- * (no evaluation: a kink at the top is where a min or max of two solids creases, Barth's
- * sextic in its ball, the gyroid in its ball). False, piece untouched or partly written, when
- * t does not end so, its result shares a register with an operand, or a bound is NaN. */
-bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, ism_ivgrad piece[2]);
+/* Right after an ism_eval_interval_grad of t on ws over box with no branch forced (force
+ * NULL), where t ends in a min or max of two registers (or of a register and a constant) that
+ * depends on all of x, y and z, and whose two branches the box allows (a free kink): f and ∇f
+ * over box with that last instruction forced onto branch A (piece[0]) and onto B (piece[1]),
+ * bit for bit what ism_eval_interval_grad with that force gives, read from the registers the
+ * pass left (no evaluation: a kink at the top is where a min or max of two solids creases,
+ * Barth's sextic in its ball, the gyroid in its ball). False, piece untouched, when the last
+ * pass on ws was not that one (another tape, another box, a force, a jet), t does not end
+ * so, or its result shares a register with an operand. */
+bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, const ism_interval box[3],
+                          ism_ivgrad piece[2]);
 
 /* ism_eval_interval_grad with no branch forced and no kinks wanted, keeping in ws every
  * instruction's value and first partials: a following ism_eval_interval_jet of t over the

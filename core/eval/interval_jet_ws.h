@@ -31,6 +31,10 @@ struct ism_ivjet_ws {
      * ism_eval_interval_grad_kept (kept_t over kept_box), when kept_ok: that pass met no
      * kink and its record is unused (the jet that uses it asks whether every instruction of
      * kept_t is one whose Hessian hess_only can take from them). */
+    /* The registers r hold an unforced gradient pass (run's, second = 0, force NULL) of
+     * last_t over last_box, read by ism_ivjet_top_pieces; NULL after any other pass. */
+    const ism_tape *last_t;
+    ism_interval last_box[3];
     size_t kept_cap;
     ism_kept_vd *kept;
     const ism_tape *kept_t;

@@ -112,7 +112,7 @@ static bool certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
        pass just left in jet (interval_jet.h), no pass for the kinks' places nor the two
        forced (barth-sextic E 0.0259: 2,168 boxes, 3 passes of ~3,550 instructions each) */
     ism_ivgrad piece[2];
-    if (nk == 1 && ism_ivjet_top_pieces(t, jet, piece))
+    if (nk == 1 && ism_ivjet_top_pieces(t, jet, box, piece))
         return one_slope(piece, 2);
     /* where the kinks are: asked again, only of such a box (the bytes cost every box) */
     uint8_t kinks[ISM_GRAPH_MAX_TAPE];

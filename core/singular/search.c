@@ -188,7 +188,7 @@ static bool some_piece_may_vanish(const search *s, worker *w, const ism_interval
        pieces' gradients are the operands' the unforced pass just left in w->jw, no pass of
        its own (Barth at E 0.0259: 25,745 forced passes, 90.8M of the search's 225.8M) */
     ism_ivgrad piece[2];
-    if (nk == 1 && ism_ivjet_top_pieces(s->t, w->jw, piece))
+    if (nk == 1 && ism_ivjet_top_pieces(s->t, w->jw, x, piece))
         return grad_may_vanish(piece[0].d) || grad_may_vanish(piece[1].d);
     size_t at[SEARCH_MAX_SPLIT], n = 0;
     for (size_t i = 0; i < ism_tape_length(s->t) && n < nk; i++)
