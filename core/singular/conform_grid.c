@@ -171,22 +171,8 @@ static bool box_inside(const double lo[3], const double hi[3], const double box[
     return true;
 }
 
-/* A widening reaches at least this share of the covered box's largest side beyond the box
- * asked for: each pass costs a look at every vertex and triangle, and a locus spread over the
- * mesh widened the box by one small query at a time (Barth's sextic at E 0.0259 before the
- * growth: 30 singular points, 28 passes, 38M of its 1,444M instructions). Each pass then
- * files what it reaches, and which triangles a query gathers does not change, only the order
- * they were filed in: the cutter's queries sort what they gather, the longest edge is a
- * maximum; the pinch untangling's list (conform_refine.c) keeps the gather order, which can
- * change only at a pass that COVER_PLAIN_PASSES passes came before (mesh_identity's 217 runs
- * identical even growing from the first pass). */
-#define COVER_GROWTH 0.5
-/* ... from this many passes on: a locus of a few parts (cross-cap's two pinch points and its
- * double line) is covered in a few passes, and a grown box would file triangles no query
- * needs (cross-cap at the default bound, ism_conform_mesh's instructions: 26.8M without the
- * growth, 29.4M growing from the first pass, 29.2M from the 4th, 26.8M from the 8th; Barth
- * at E 0.0259: 99M, 74.5M, 77M, 80.7M). */
-#define COVER_PLAIN_PASSES 8
+/* How far a widening reaches, and from which pass on: CF_COVER_GROWTH, CF_COVER_PLAIN_PASSES
+ * (conform_internal.h, where the grid's tests read them). */
 
 /* Vertices or triangles per task of a cover pass: fixed, so the triangles it files, and
  * their order, are the same on any number of threads. */
@@ -249,8 +235,8 @@ bool cf_tgrid_cover(cf_tgrid *g, const ism_mesh *m, const double lo[3], const do
     double grown = 0; /* the covered box's largest side (0 while empty) */
     for (int k = 0; k < 3; k++)
         grown = fmax(grown, g->cover[k + 3] - g->cover[k]);
-    if (g->cover_passes >= COVER_PLAIN_PASSES)
-        ahead = fmax(ahead, COVER_GROWTH * grown);
+    if (g->cover_passes >= CF_COVER_PLAIN_PASSES)
+        ahead = fmax(ahead, CF_COVER_GROWTH * grown);
     for (int k = 0; k < 3; k++) {
         c.want[k] = fmin(g->cover[k], lo[k] - ahead);
         c.want[k + 3] = fmax(g->cover[k + 3], hi[k] + ahead);

@@ -246,6 +246,23 @@ bool cf_longest_edge_near(cf_ctx *c, const double p[3], double r, double *out);
 bool cf_compact(cf_ctx *c);
 
 /* ---- conform_grid.c: the triangles by position ---- */
+/* A widening reaches at least this share of the covered box's largest side beyond the box
+ * asked for: each pass costs a look at every vertex and triangle, and a locus spread over the
+ * mesh widened the box by one small query at a time (Barth's sextic at E 0.0259 before the
+ * growth: 30 singular points, 28 passes, 38M of its 1,444M instructions). Each pass then
+ * files what it reaches, and which triangles a query gathers does not change, only the order
+ * they were filed in: the cutter's queries sort what they gather, the longest edge is a
+ * maximum; the pinch untangling's list (conform_refine.c) keeps the gather order, which can
+ * change only at a pass that CF_COVER_PLAIN_PASSES passes came before (mesh_identity's 217 runs
+ * identical even growing from the first pass). */
+#define CF_COVER_GROWTH 0.5
+/* ... from this many passes on: a locus of a few parts (cross-cap's two pinch points and its
+ * double line) is covered in a few passes, and a grown box would file triangles no query
+ * needs (cross-cap at the default bound, ism_conform_mesh's instructions: 26.8M without the
+ * growth, 29.4M growing from the first pass, 29.2M from the 4th, 26.8M from the 8th; Barth
+ * at E 0.0259: 99M, 74.5M, 77M, 80.7M). */
+#define CF_COVER_PLAIN_PASSES 8
+
 /* An empty grid for a box with low corner origin and longest side extent, finest cells of
  * finest_cell, over the ntris triangles of the mesh (filed on demand, cf_tgrid_cover).
  * False on a degenerate scale or when out of memory. */
@@ -257,9 +274,9 @@ void cf_tgrid_free(cf_tgrid *g);
 bool cf_tgrid_add(cf_tgrid *g, const ism_mesh *m, uint32_t t);
 /* Makes sure every triangle whose box meets the box [lo, hi] is filed: when that box is not
  * covered yet, one pass over the mesh's first `base` triangles files those meeting it grown
- * by `ahead` on every side (room for the next widenings of a cut), and once COVER_PLAIN_PASSES
- * passes came before, by at least COVER_GROWTH times the covered box's largest side
- * (conform_grid.c). cf_tgrid_gather covers its query box itself (ahead 0, so grown only by
+ * by `ahead` on every side (room for the next widenings of a cut), and once
+ * CF_COVER_PLAIN_PASSES passes came before, by at least CF_COVER_GROWTH times the covered box's
+ * largest side. cf_tgrid_gather covers its query box itself (ahead 0, so grown only by
  * that); a caller that knows the region its next queries need asks for it first (a query not
  * covered costs a pass of its own). False when out of memory. */
 bool cf_tgrid_cover(cf_tgrid *g, const ism_mesh *m, const double lo[3], const double hi[3],
