@@ -667,8 +667,7 @@ static size_t run_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval bo
             kinks[i] = (uint8_t)kink;
     }
     *out = r[t->result];
-    ws->last_t = !second && !force ? t : NULL;
-    memcpy(ws->last_box, box, sizeof ws->last_box);
+    ws->last_t = NULL; /* not a gradient pass: ism_ivjet_top_pieces reads nothing */
     return nkinks;
 }
 
@@ -701,6 +700,8 @@ static size_t run_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval bo
         GRAD_STEP(BAD, JET_BAD)                                                             \
     done:                                                                                   \
         *(out) = r[(t)->result];                                                            \
+        (ws)->last_t = force ? NULL : (t); /* the registers ism_ivjet_top_pieces reads */   \
+        memcpy((ws)->last_box, box, sizeof(ws)->last_box);                                  \
         return nkinks;                                                                      \
     } while (0)
 
@@ -921,7 +922,7 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
  * before it read their force byte only at a kink, and it is free only there), and there
  * op_branch keeps the natural enclosure as the value and copies the branch's partials
  * (take_derivs; sanitize then changes nothing): what the unforced pass left in the operands'
- * registers, when t ends there and nothing overwrote them. No bound read can be NaN: run
+ * registers, when t ends there and nothing overwrote them. No bound read can be NaN: the pass
  * sanitized every register it wrote, and kept the partials outside an instruction's want at
  * 0, so no test for one here. */
 bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, const ism_interval box[3],

@@ -27,14 +27,15 @@ _Static_assert(ISM_IVGRAD_BATCH % ISM_IVG_VL == 0, "a batch is whole groups of l
 struct ism_ivjet_ws {
     uint32_t nregs;
     ism_ivjet *r;
+    /* The registers r hold an unforced gradient pass (force NULL; run_grad's or
+     * run_grad_kept's) of last_t over last_box, read by ism_ivjet_top_pieces; NULL after a
+     * second-order pass or hess_only. */
+    const ism_tape *last_t;
+    ism_interval last_box[3];
     /* kept[i]: instruction i's value and first partials from the last
      * ism_eval_interval_grad_kept (kept_t over kept_box), when kept_ok: that pass met no
      * kink and its record is unused (the jet that uses it asks whether every instruction of
      * kept_t is one whose Hessian hess_only can take from them). */
-    /* The registers r hold an unforced gradient pass (run's, second = 0, force NULL) of
-     * last_t over last_box, read by ism_ivjet_top_pieces; NULL after any other pass. */
-    const ism_tape *last_t;
-    ism_interval last_box[3];
     size_t kept_cap;
     ism_kept_vd *kept;
     const ism_tape *kept_t;
