@@ -83,7 +83,10 @@ double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], do
 
 /* Searches stepped together by ism_regula_falsi_lanes: a step's points in one
  * ism_eval_points call (instructions a point on the Klein bottle's tape: 410 one at a time,
- * 161 / 139 at 16 / 32 points; eval.h). */
+ * 161 / 139 at 16 / 32 points; eval.h). With 64 lanes a call held ~31 points on average, as
+ * searches end at different steps (292a171, Klein bottle at E 3.27e-3, callgrind: 60,250
+ * searches, 134 instructions a point in lanes against ~310 alone); 64 was not measured
+ * against 32 or 128. */
 #define FALSI_LANES 64
 
 void ism_regula_falsi_lanes(ism_sampler *s, const double (*a)[3], const double (*b)[3],
