@@ -3,6 +3,7 @@
  * tangent root, and a check that counts segments likely to hold more than two roots. */
 #include "core/octree/edge_roots.h"
 
+#include <assert.h>
 #include <math.h>
 #include <string.h>
 
@@ -92,19 +93,22 @@ double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], do
 void ism_regula_falsi_lanes(ism_sampler *s, const double (*a)[3], const double (*b)[3],
                             const double *fa, const double *fb, double *t, size_t n)
 {
+    assert(!s->local); /* every point on s->tape: a local tape would need tape_at per lane */
+    if (!s->batch) { /* the scalar reference path: one search at a time, the same bits */
+        for (size_t i = 0; i < n; i++)
+            t[i] = ism_regula_falsi(s, a[i], b[i], fa[i], fb[i]);
+        return;
+    }
     falsi q[FALSI_LANES];
     /* lane j runs search lane[j] from o[j] along d[j] = b − a (lerp's point, bit for bit) */
     double o[FALSI_LANES][3], d[FALSI_LANES][3];
     size_t lane[FALSI_LANES], live = 0, next = 0;
     for (;;) {
-        /* free lanes take the next searches (one whose bracket is narrow already ends) */
+        /* free lanes take the next searches (a search starts on [0, 1], wider than
+         * FALSI_TOLERANCE, so each takes at least one step) */
         while (live < FALSI_LANES && next < n) {
             size_t i = next++;
             q[live] = falsi_start(fa[i], fb[i]);
-            if (!falsi_running(&q[live])) {
-                t[i] = falsi_root(&q[live]);
-                continue;
-            }
             for (int k = 0; k < 3; k++) {
                 o[live][k] = a[i][k];
                 d[live][k] = b[i][k] - a[i][k];

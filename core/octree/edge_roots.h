@@ -67,8 +67,9 @@ double ism_regula_falsi(ism_sampler *s, const double a[3], const double b[3], do
 
 /* ism_regula_falsi on n segments a[i]→b[i] (fa[i]·fb[i] < 0) into t[i], bit for bit each
  * single search's root, the searches stepped side by side (f at a step's points in one
- * batch: ism_eval_points, lane by lane ism_eval_point's value). s->local must be NULL: every
- * point is evaluated on s->tape (the octree build's samplers). */
+ * batch: ism_eval_points, lane by lane ism_eval_point's value). s->local must be NULL
+ * (asserted): every point is evaluated on s->tape (the octree build's samplers). Without
+ * s->batch (the scalar reference path) the searches run one at a time (ism_regula_falsi). */
 void ism_regula_falsi_lanes(ism_sampler *s, const double (*a)[3], const double (*b)[3],
                             const double *fa, const double *fb, double *t, size_t n);
 

@@ -982,8 +982,11 @@ static bool decide_chunk(build *b, thread_state *th, level_vec *lv, size_t from,
         if (ln->tested)
             tested[nt++] = &ln->nd;
     }
+    const ism_tape *saved = th->s.tape;
+    th->s.tape = b->p->tape; /* the tape the nodes are tested on (levels_apply: f's own) */
     ism_prefetch_nodes(&th->memo, th->corners, ISM_CORNER_MEMO_BITS, b->grid, tested, nt,
                        &th->s, corners, have);
+    th->s.tape = saved;
     for (size_t j = from, t = 0; j < to; j++) {
         if (atomic_load(&b->failed) != ISM_BUILD_OK)
             return false;

@@ -118,6 +118,7 @@ Test(edge_roots, lanes_give_each_search_root_bit_for_bit)
         one.tape = tape;
         one.ws = ism_eval_ws_new(tape);
         lanes = one;
+        lanes.batch = true; /* as the octree build's samplers (else one at a time) */
         lanes.ws = ism_eval_ws_new(tape);
         cr_assert(one.ws && lanes.ws);
         test_rng r = {0x5eed + i};
