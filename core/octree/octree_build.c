@@ -21,6 +21,7 @@
 #include "core/util/grow.h"
 #include "core/util/zeroed.h"
 
+#include <assert.h>
 #include <pthread.h>
 #include <stdalign.h>
 #include <stdatomic.h>
@@ -1058,6 +1059,10 @@ static bool grow_levels(build *b, thread_state *th, node_vec *v, int limit)
             size_t to = lv[l].n - from < LEVEL_CHUNK ? lv[l].n : from + LEVEL_CHUNK;
             ok = decide_chunk(b, th, &lv[l], from, to, &lv[l + 1], k);
         }
+    /* No node past the finest lattice level is split: every split path stops at limit or
+     * thin_depth, both at most ISM_GRID_MAX_DEPTH. A child appended there would be laid out
+     * as an untested leaf, so say so loudly rather than mesh it. */
+    assert(!ok || lv[ISM_GRID_MAX_DEPTH + 1].n == 0);
     ok = ok && lay_out(b, v, 0, lv, top, 0);
     for (int j = top; j <= ISM_GRID_MAX_DEPTH + 1; j++)
         free(lv[j].v);
