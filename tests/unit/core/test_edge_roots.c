@@ -9,7 +9,10 @@
  * segment [0, 1], moved by 1e-3, and by (√2 − 1) / 2, c with it. The single-root search run
  * in lanes (ism_regula_falsi_lanes: the octree build's level prefetch) against the search
  * one segment at a time: the same root bits and the same evaluations counted, on every
- * example surface, with more segments than lanes. */
+ * example surface, with more segments than lanes, and f changing sign across each root
+ * (t ± 1e-9, measured). Segments whose first secant lands exactly on the root (f = 0 there:
+ * a lane freed after one step) mixed with ordinary ones: the same, and those roots the
+ * closed form's t. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
@@ -104,6 +107,21 @@ static size_t crossing_segments(const test_surface *s, ism_tape *t, ism_eval_ws 
 }
 
 #define LANE_SEGMENTS 150 /* more than the lanes run at once (64): lanes are reused */
+#define SIGN_STEP 1e-9     /* past the searches' bracket (1e-10 of the segment) */
+
+/* Does f change sign across t on a→b (or vanish at t)? */
+static bool sign_changes_at(ism_tape *tape, ism_eval_ws *ws, const double a[3],
+                            const double b[3], double t)
+{
+    double f[3];
+    for (int k = 0; k < 3; k++) {
+        double u = t + (k - 1) * SIGN_STEP, p[3];
+        for (int i = 0; i < 3; i++)
+            p[i] = a[i] + u * (b[i] - a[i]);
+        f[k] = ism_eval_point(tape, ws, p[0], p[1], p[2]);
+    }
+    return f[1] == 0 || (f[0] < 0 && f[2] > 0) || (f[0] > 0 && f[2] < 0);
+}
 
 Test(edge_roots, lanes_give_each_search_root_bit_for_bit)
 {
@@ -134,6 +152,8 @@ Test(edge_roots, lanes_give_each_search_root_bit_for_bit)
                           "%s segment %zu of %zu: lanes %.17g, alone %.17g", s->name, j, m, t[j],
                           want);
                 cr_expect(t[j] > 0 && t[j] < 1, "%s: root at %g", s->name, t[j]);
+                cr_expect(sign_changes_at(tape, one.ws, a[j], b[j], t[j]),
+                          "%s segment %zu: f keeps its sign across %.17g", s->name, j, t[j]);
             }
             cr_expect_eq(lanes.n_point, one.n_point, "%s: %llu evaluations in lanes, %llu alone",
                          s->name, (unsigned long long)lanes.n_point,
@@ -147,4 +167,82 @@ Test(edge_roots, lanes_give_each_search_root_bit_for_bit)
     }
     cr_expect_gt(full, TEST_NSURFACES / 2, "only %zu of %zu surfaces gave %d segments (%zu in all)",
                  full, TEST_NSURFACES, LANE_SEGMENTS, tested);
+}
+
+/* f = (x − c)(1 + y²), c dyadic (three placements): on a segment along x at a dyadic y from
+ * c − c1 to c + c2 (c1, c2 dyadic) f is linear with exact values, so the first secant,
+ * t = c1 / (c1 + c2), lands on x = c exactly and f is 0 there (the lane's zero exit); every
+ * third segment is such, the others cross y from −0.4 to 0.6 (f cubic along them: several
+ * steps). Searched in lanes (batch) and one at a time (no batch) against ism_regula_falsi. */
+Test(edge_roots, lanes_free_a_lane_on_an_exact_zero)
+{
+    static double a[LANE_SEGMENTS][3], b[LANE_SEGMENTS][3], fa[LANE_SEGMENTS],
+        fb[LANE_SEGMENTS], t[LANE_SEGMENTS], want_t[LANE_SEGMENTS];
+    static const double halves[][2] = {{0.25, 0.25}, {0.25, 0.75}, {0.125, 0.375},
+                                       {0.5, 0.5}, {0.375, 0.125}};
+    const double places[] = {0.5, 0.5 + 0x1p-10, -0.75};
+    for (int pl = 0; pl < 3; pl++) {
+        double c = places[pl];
+        ism_param prm[1] = {{"c", c}};
+        pf_surface sf = {"(x - c) * (1 + y*y)", prm, 1, NULL, 0};
+        ism_tape *tape = pf_compile(&sf);
+        ism_sampler one;
+        memset(&one, 0, sizeof one);
+        one.tape = tape;
+        one.ws = ism_eval_ws_new(tape);
+        cr_assert(one.ws);
+        size_t exact = 0;
+        for (size_t i = 0; i < LANE_SEGMENTS; i++) {
+            double z = -0.5 + 0x1p-6 * (double)(i % 64);
+            want_t[i] = -1;
+            if (i % 3 == 0) {
+                const double *h = halves[(i / 3) % 5];
+                double y = 0x1p-4 * (double)(i % 7);
+                a[i][0] = c - h[0], a[i][1] = y, a[i][2] = z;
+                b[i][0] = c + h[1], b[i][1] = y, b[i][2] = z;
+                want_t[i] = h[0] / (h[0] + h[1]);
+                exact++;
+            } else {
+                double w = 0.01 * (double)(i % 11);
+                a[i][0] = c - 0.3 - w, a[i][1] = -0.4, a[i][2] = z;
+                b[i][0] = c + 0.2 + w, b[i][1] = 0.6, b[i][2] = z;
+            }
+            fa[i] = ism_eval_point(tape, one.ws, a[i][0], a[i][1], a[i][2]);
+            fb[i] = ism_eval_point(tape, one.ws, b[i][0], b[i][1], b[i][2]);
+            cr_assert(fa[i] < 0 && fb[i] > 0, "segment %zu: ends %g, %g", i, fa[i], fb[i]);
+        }
+        cr_assert_gt(LANE_SEGMENTS - exact, 64, "more ordinary searches than lanes");
+        for (int batch = 0; batch < 2; batch++) {
+            ism_sampler lanes = one;
+            lanes.batch = batch;
+            lanes.ws = ism_eval_ws_new(tape);
+            cr_assert(lanes.ws);
+            one.n_point = lanes.n_point = 0;
+            ism_regula_falsi_lanes(&lanes, (const double (*)[3])a, (const double (*)[3])b, fa,
+                                   fb, t, LANE_SEGMENTS);
+            size_t zeros = 0;
+            for (size_t j = 0; j < LANE_SEGMENTS; j++) {
+                uint64_t before = one.n_point;
+                double want = ism_regula_falsi(&one, a[j], b[j], fa[j], fb[j]);
+                cr_expect(memcmp(&want, &t[j], sizeof want) == 0,
+                          "c %g batch %d segment %zu: lanes %.17g, alone %.17g", c, batch, j,
+                          t[j], want);
+                cr_expect(sign_changes_at(tape, one.ws, a[j], b[j], t[j]),
+                          "c %g segment %zu: f keeps its sign across %.17g", c, j, t[j]);
+                if (want_t[j] >= 0) {
+                    cr_expect_eq(t[j], want_t[j], "c %g segment %zu: root %.17g, not %.17g", c,
+                                 j, t[j], want_t[j]);
+                    zeros += one.n_point - before == 1; /* ended on its first step */
+                }
+            }
+            cr_expect_eq(zeros, exact, "c %g: %zu of %zu exact segments ended at once", c,
+                         zeros, exact);
+            cr_expect_eq(lanes.n_point, one.n_point, "c %g batch %d: %llu evaluations, %llu",
+                         c, batch, (unsigned long long)lanes.n_point,
+                         (unsigned long long)one.n_point);
+            ism_eval_ws_free(lanes.ws);
+        }
+        ism_eval_ws_free(one.ws);
+        ism_tape_free(tape);
+    }
 }
