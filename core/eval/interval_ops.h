@@ -61,7 +61,9 @@ static inline ism_interval iv_of_vec(__m128d v)
 }
 
 /* [down1(lo), up1(hi)] in one vector pass: the same IEEE operations lane by lane (x - c is
- * x + (-c), and |x| * (-r) is -(|x| * r) exactly), so the same bits. */
+ * x + (-c), and |x| * (-r) is -(|x| * r) exactly in round-to-nearest), so the same bits for
+ * every non-NaN result; a NaN stays a NaN (its sign may differ: the compiler may swap the
+ * add's operands, and which NaN wins follows the order), and ism_iv_sane discards it. */
 static inline __m128d round1_out(__m128d v)
 {
     const __m128d step = _mm_set_pd(ISM_ROUND1_ABS, -ISM_ROUND1_ABS);
