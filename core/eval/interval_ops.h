@@ -11,7 +11,12 @@
  *
  * The common operations are written without branches (selects only). The batched interval
  * evaluator rounds by the rounding mode instead and uses these for its box-by-box operations
- * (libm functions, division, powers, abs) only. */
+ * (libm functions, division, powers, abs) only.
+ *
+ * Needs FP contraction off (-ffp-contract=off; gcc's -std=c11 implies it, clang's default
+ * is on): a contracted (x + c) + |x|*r is one fma, still outward but not the bits of the
+ * SSE2 forms here or of interval_lanes.h's vdown1 / vup1, which the "same bits" claims and
+ * the mesh_identity sets rely on (revJ 3: -mavx2 -mfma, clang, 2.2M of 20M cases differ). */
 #ifndef ISM_INTERVAL_OPS_H
 #define ISM_INTERVAL_OPS_H
 
