@@ -21,6 +21,7 @@
 #define ISM_INTERVAL_OPS_H
 
 #include <math.h>
+#include <stddef.h>
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
@@ -58,10 +59,15 @@ static inline ism_interval ism_iv_sane(ism_interval r)
 /* An interval as one SSE2 vector [lo, hi] and back. */
 static inline __m128d iv_vec(ism_interval a) { return _mm_set_pd(a.hi, a.lo); }
 
+/* iv_of_vec stores the vector's 16 bytes over the whole struct, lo then hi. */
+_Static_assert(sizeof(ism_interval) == 2 * sizeof(double) &&
+                   offsetof(ism_interval, hi) == sizeof(double),
+               "ism_interval is [lo, hi] with no padding");
+
 static inline ism_interval iv_of_vec(__m128d v)
 {
     ism_interval r;
-    _mm_storeu_pd(&r.lo, v);
+    _mm_storeu_pd((double *)(void *)&r, v); /* the object r, not past r.lo */
     return r;
 }
 
