@@ -481,50 +481,50 @@ static int op_branch(ism_ivjet *o, const ism_instr *in, const ism_ivjet *r, uint
 }
 
 /* Every operation's step, as an expression giving 1 at a free kink (else 0) in o (its
- * register), a (its first operand's jet), in, r (the registers), W (the partials wanted) and
- * F (its forced branch, read by min, max and abs alone): one list, expanded by jet_op's
- * switch (the second-order pass) and by run_grad's labels (the gradient pass). Each step
- * names its operation as a constant, so the affine and one-argument steps' own switches
- * fold away. */
+ * register), a (its first operand's jet), in, r (the registers), JET_W (the partials
+ * wanted) and JET_F (its forced branch, read by min, max and abs alone; both macros, prefixed
+ * so that no identifier in between is rewritten): one list, expanded by jet_op's switch
+ * (the second-order pass) and by run_grad's labels (the gradient pass). Each step names its
+ * operation as a constant, so the affine and one-argument steps' own switches fold away. */
 #define JET_OPS(X)                                                                          \
-    X(ISM_OP_CONST, (o->v = ivc(in->imm), set_zero_derivs(o, W), 0))                        \
-    X(ISM_OP_COPY, (affine(o, a, ISM_OP_COPY, in->imm, W), 0))                              \
-    X(ISM_OP_ADD_RR, (op_add(o, a, &r[in->b], 0, W), 0))                                    \
-    X(ISM_OP_ADD_RC, (affine(o, a, ISM_OP_ADD_RC, in->imm, W), 0))                          \
-    X(ISM_OP_SUB_RR, (op_add(o, a, &r[in->b], 1, W), 0))                                    \
-    X(ISM_OP_SUB_CR, (affine(o, a, ISM_OP_SUB_CR, in->imm, W), 0))                          \
-    X(ISM_OP_MUL_RR, (op_mul(o, a, &r[in->b], W), 0))                                       \
-    X(ISM_OP_MUL_RC, (affine(o, a, ISM_OP_MUL_RC, in->imm, W), 0))                          \
-    X(ISM_OP_DIV_RR, (op_div(o, a, &r[in->b], W), 0))                                       \
-    X(ISM_OP_DIV_RC, (affine(o, a, ISM_OP_DIV_RC, in->imm, W), 0))                          \
-    X(ISM_OP_DIV_CR, (op_unary(o, in, ISM_OP_DIV_CR, a, W), 0))                             \
-    X(ISM_OP_MIN_RR, op_branch(o, in, r, F, W))                                             \
-    X(ISM_OP_MIN_RC, op_branch(o, in, r, F, W))                                             \
-    X(ISM_OP_MAX_RR, op_branch(o, in, r, F, W))                                             \
-    X(ISM_OP_MAX_RC, op_branch(o, in, r, F, W))                                             \
-    X(ISM_OP_NEG, (affine(o, a, ISM_OP_NEG, in->imm, W), 0))                                \
-    X(ISM_OP_SQUARE, (op_unary(o, in, ISM_OP_SQUARE, a, W), 0))                             \
-    X(ISM_OP_POWI, (op_unary(o, in, ISM_OP_POWI, a, W), 0))                                 \
-    X(ISM_OP_POWC, (op_unary(o, in, ISM_OP_POWC, a, W), 0))                                 \
-    X(ISM_OP_SQRT, (op_unary(o, in, ISM_OP_SQRT, a, W), 0))                                 \
-    X(ISM_OP_SIN, (op_unary(o, in, ISM_OP_SIN, a, W), 0))                                   \
-    X(ISM_OP_COS, (op_unary(o, in, ISM_OP_COS, a, W), 0))                                   \
-    X(ISM_OP_TAN, (op_unary(o, in, ISM_OP_TAN, a, W), 0))                                   \
-    X(ISM_OP_EXP, (op_unary(o, in, ISM_OP_EXP, a, W), 0))                                   \
-    X(ISM_OP_LOG, (op_unary(o, in, ISM_OP_LOG, a, W), 0))                                   \
-    X(ISM_OP_ABS, op_branch(o, in, r, F, W))
+    X(ISM_OP_CONST, (o->v = ivc(in->imm), set_zero_derivs(o, JET_W), 0))                    \
+    X(ISM_OP_COPY, (affine(o, a, ISM_OP_COPY, in->imm, JET_W), 0))                          \
+    X(ISM_OP_ADD_RR, (op_add(o, a, &r[in->b], 0, JET_W), 0))                                \
+    X(ISM_OP_ADD_RC, (affine(o, a, ISM_OP_ADD_RC, in->imm, JET_W), 0))                      \
+    X(ISM_OP_SUB_RR, (op_add(o, a, &r[in->b], 1, JET_W), 0))                                \
+    X(ISM_OP_SUB_CR, (affine(o, a, ISM_OP_SUB_CR, in->imm, JET_W), 0))                      \
+    X(ISM_OP_MUL_RR, (op_mul(o, a, &r[in->b], JET_W), 0))                                   \
+    X(ISM_OP_MUL_RC, (affine(o, a, ISM_OP_MUL_RC, in->imm, JET_W), 0))                      \
+    X(ISM_OP_DIV_RR, (op_div(o, a, &r[in->b], JET_W), 0))                                   \
+    X(ISM_OP_DIV_RC, (affine(o, a, ISM_OP_DIV_RC, in->imm, JET_W), 0))                      \
+    X(ISM_OP_DIV_CR, (op_unary(o, in, ISM_OP_DIV_CR, a, JET_W), 0))                         \
+    X(ISM_OP_MIN_RR, op_branch(o, in, r, JET_F, JET_W))                                     \
+    X(ISM_OP_MIN_RC, op_branch(o, in, r, JET_F, JET_W))                                     \
+    X(ISM_OP_MAX_RR, op_branch(o, in, r, JET_F, JET_W))                                     \
+    X(ISM_OP_MAX_RC, op_branch(o, in, r, JET_F, JET_W))                                     \
+    X(ISM_OP_NEG, (affine(o, a, ISM_OP_NEG, in->imm, JET_W), 0))                            \
+    X(ISM_OP_SQUARE, (op_unary(o, in, ISM_OP_SQUARE, a, JET_W), 0))                         \
+    X(ISM_OP_POWI, (op_unary(o, in, ISM_OP_POWI, a, JET_W), 0))                             \
+    X(ISM_OP_POWC, (op_unary(o, in, ISM_OP_POWC, a, JET_W), 0))                             \
+    X(ISM_OP_SQRT, (op_unary(o, in, ISM_OP_SQRT, a, JET_W), 0))                             \
+    X(ISM_OP_SIN, (op_unary(o, in, ISM_OP_SIN, a, JET_W), 0))                               \
+    X(ISM_OP_COS, (op_unary(o, in, ISM_OP_COS, a, JET_W), 0))                               \
+    X(ISM_OP_TAN, (op_unary(o, in, ISM_OP_TAN, a, JET_W), 0))                               \
+    X(ISM_OP_EXP, (op_unary(o, in, ISM_OP_EXP, a, JET_W), 0))                               \
+    X(ISM_OP_LOG, (op_unary(o, in, ISM_OP_LOG, a, JET_W), 0))                               \
+    X(ISM_OP_ABS, op_branch(o, in, r, JET_F, JET_W))
 ISM_THREADED_COMPLETE(JET_OPS, "JET_OPS names every operation (the label table)");
 
 /* An operation code past the list: the whole line, its derivatives too. */
-#define JET_BAD (o->v = ism_iv_whole(), set_whole_derivs(o, a, a, W), 0)
+#define JET_BAD (o->v = ism_iv_whole(), set_whole_derivs(o, a, a, JET_W), 0)
 
 /* One instruction; returns 1 when it is a free kink. */
 static ALWAYS_INLINE int jet_op(const ism_instr *in, ism_ivjet *r, uint8_t force, unsigned w)
 {
     ism_ivjet *o = &r[in->out];
     const ism_ivjet *a = &r[in->a];
-#define W w
-#define F force
+#define JET_W w
+#define JET_F force
 #define CASE(OP, E) case OP: return E;
     switch (in->op) {
         JET_OPS(CASE)
@@ -532,8 +532,8 @@ static ALWAYS_INLINE int jet_op(const ism_instr *in, ism_ivjet *r, uint8_t force
         return JET_BAD;
     }
 #undef CASE
-#undef F
-#undef W
+#undef JET_F
+#undef JET_W
 }
 
 #if defined(__SSE2__)
@@ -706,7 +706,8 @@ static size_t run_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval bo
     } while (0)
 
 /* One operation's labelled code in RUN_GRAD_BODY. */
-#define F (force ? force[in - t->code] : ISM_BRANCH_FREE)
+#define JET_F (force ? force[in - t->code] : ISM_BRANCH_FREE)
+#define JET_W w /* GRAD_STEP's local want bits */
 #define GRAD_STEP(OP, E)                                                                    \
     L_##OP : {                                                                              \
         ism_ivjet *o = &r[in->out];                                                         \
@@ -714,13 +715,13 @@ static size_t run_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval bo
         (void)a; /* not every step reads it */                                              \
         int kink;                                                                           \
         if (in->free_of == 0) {                                                             \
-            const unsigned W = 7u;                                                          \
+            const unsigned w = 7u;                                                          \
             kink = E;                                                                       \
-            sanitize(o, W);                                                                 \
+            sanitize(o, w);                                                                 \
         } else {                                                                            \
-            const unsigned W = ISM_FREE_ALL & ~(unsigned)in->free_of;                       \
+            const unsigned w = ISM_FREE_ALL & ~(unsigned)in->free_of;                       \
             kink = E;                                                                       \
-            sanitize(o, W);                                                                 \
+            sanitize(o, w);                                                                 \
         }                                                                                   \
         if (kink) {                                                                         \
             nkinks++;                                                                       \
@@ -761,7 +762,8 @@ static size_t run_grad_kept(const ism_tape *t, ism_ivjet_ws *ws, const ism_inter
     RUN_GRAD_BODY;
 }
 #undef GRAD_STEP
-#undef F
+#undef JET_F
+#undef JET_W
 #undef RUN_GRAD_BODY
 
 /* The Hessian part of one instruction (hess_from_kept(in->op)), the second-order pass's
