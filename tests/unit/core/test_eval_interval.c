@@ -5,6 +5,7 @@
  * holding 0, clipped sqrt/log, no NaN bound ever, and widths within a stated factor of the
  * sampled range for polynomials on small boxes. */
 #include <criterion/criterion.h>
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -105,6 +106,73 @@ Test(eval_interval, outward_rounding_moves_at_least_one_ulp)
     }
     cr_expect_eq(down1(-INFINITY), -INFINITY);
     cr_expect_eq(up1(INFINITY), INFINITY);
+}
+
+/* Bit patterns for the lanes test: a quarter subnormal (exponent field 0), the rest any. */
+static double lane_bits(test_rng *rng)
+{
+    uint64_t u = (uint64_t)(test_uniform(rng, 0, 0x1p32)) << 32 |
+                 (uint64_t)(test_uniform(rng, 0, 0x1p32));
+    if (test_uniform(rng, 0, 1) < 0.25)
+        u &= ~(0x7ffull << 52);
+    double x;
+    memcpy(&x, &u, sizeof x);
+    return x;
+}
+
+/* Equal bits, or both NaN (a NaN's sign may differ: see round1_out). */
+static int same_bits(double a, double b)
+{
+    return (a != a && b != b) || memcmp(&a, &b, sizeof a) == 0;
+}
+
+#define LANES_SAME(name, got, want_lo, want_hi)                                             \
+    do {                                                                                    \
+        ism_interval g_ = (got);                                                            \
+        double wl_ = (want_lo), wh_ = (want_hi);                                            \
+        cr_assert(same_bits(g_.lo, wl_) && same_bits(g_.hi, wh_),                           \
+                  "%s(a=[%a, %a], b=[%a, %a], c=%a) = [%a, %a], scalar [%a, %a]", name,     \
+                  a.lo, a.hi, b.lo, b.hi, c, g_.lo, g_.hi, wl_, wh_);                       \
+    } while (0)
+
+/* The SSE2 forms of the common operations (the only ones compiled on x86-64) against
+ * down1 / up1 of the scalar expressions, written out here: the same bits for every input,
+ * a NaN as a NaN; special values (signed zeros, infinities, NaN, subnormals, DBL_MAX) in
+ * every pair, then random bit patterns. Swapping round1_out's lanes fails it. */
+Test(eval_interval, sse2_lanes_are_the_scalar_bounds)
+{
+    const double sp[] = { 0.0, -0.0, INFINITY, -INFINITY, NAN, -NAN, 0x1p-1074, -0x1p-1074,
+                          0x1p-1022, -0x1p-1022, 0x1.ffffffffffffep-1023, -0x1.ffffffffffffep-1023,
+                          DBL_MAX, -DBL_MAX, 0x1p-970, -0x1p-1000, 1.0, -1.0, 3.0, -0.5 };
+    enum { NSP = sizeof sp / sizeof sp[0] };
+    test_rng rng = { 27 };
+    size_t n = NSP * NSP * NSP + test_scaled(400000);
+    for (size_t i = 0; i < n; i++) {
+        ism_interval a, b;
+        double c;
+        if (i < NSP * NSP * NSP) {
+            a = iv(sp[i % NSP], sp[i / NSP % NSP]);
+            b = iv(sp[i / NSP / NSP], sp[(i + 3) % NSP]);
+            c = sp[(i / NSP + 7) % NSP];
+        } else {
+            a = iv(lane_bits(&rng), lane_bits(&rng));
+            b = iv(lane_bits(&rng), lane_bits(&rng));
+            c = lane_bits(&rng);
+        }
+        LANES_SAME("iv_add", iv_add(a, b), down1(a.lo + b.lo), up1(a.hi + b.hi));
+        LANES_SAME("iv_add_c", iv_add_c(a, c), down1(a.lo + c), up1(a.hi + c));
+        LANES_SAME("iv_sub", iv_sub(a, b), down1(a.lo - b.hi), up1(a.hi - b.lo));
+        LANES_SAME("iv_c_sub", iv_c_sub(c, a), down1(c - a.hi), up1(c - a.lo));
+        ism_interval m = iv_mul_scalar(a, b);
+        LANES_SAME("iv_mul", iv_mul(a, b), m.lo, m.hi);
+        if (c > 0.0 && c < INFINITY)
+            LANES_SAME("iv_mul_cpos", iv_mul_cpos(a, c), down1(a.lo * c), up1(a.hi * c));
+        if (c < 0.0 && c > -INFINITY)
+            LANES_SAME("iv_mul_cneg", iv_mul_cneg(a, c), down1(a.hi * c), up1(a.lo * c));
+        double l2 = a.lo * a.lo, h2 = a.hi * a.hi;
+        double lo2 = a.lo >= 0.0 ? l2 : a.hi <= 0.0 ? h2 : 0.0;
+        LANES_SAME("iv_square", iv_square(a), ism_max(down1(lo2), 0.0), up1(ism_max(l2, h2)));
+    }
 }
 
 /* Relative slack of the batch's width over the single box's: the batch rounds each bound
