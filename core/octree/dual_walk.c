@@ -341,12 +341,14 @@ static bool join_parts(dual *d, walk_call *calls, size_t n, const uint8_t *held,
                                        : &scratch[part[k].thread].q[4 * part[k].at];
         size_t c = held[k] ? old->at[k + 1] - old->at[k] : part[k].n;
         memo.at[k] = m;
-        memcpy(&memo.q[4 * m], from, 4 * c * sizeof *from);
+        if (c) /* a call with no quads may have no array: memcpy wants non-null even for 0 */
+            memcpy(&memo.q[4 * m], from, 4 * c * sizeof *from);
         m += c;
     }
     if (ok) {
         memo.at[n] = total;
-        memcpy(&d->q.q[4 * base], memo.q, 4 * total * sizeof *memo.q);
+        if (total) /* d->q.q is still NULL when no round has written a quad */
+            memcpy(&d->q.q[4 * base], memo.q, 4 * total * sizeof *memo.q);
         d->q.n = base + total;
     }
     ism_dual_walk_memo_free(old);
