@@ -37,12 +37,6 @@ INLINE v4d keep(v4d c, v4i m)
     return (v4d)((v4i)c & m);
 }
 
-/* a where m is set, else b */
-INLINE v4d pick(v4i m, v4d a, v4d b)
-{
-    return (v4d)(((v4i)a & m) | ((v4i)b & ~m));
-}
-
 INLINE void k_add(double *o, const double *a, const double *b)
 {
     v4_st(o, v4_ld(a) + v4_ld(b));
@@ -82,7 +76,7 @@ INLINE void k_pick(double *o, const double *av, const double *bv, const double *
                    const double *bk, bool is_min)
 {
     v4i m = is_min ? (v4i)(v4_ld(av) < v4_ld(bv)) : (v4i)(v4_ld(av) > v4_ld(bv));
-    v4_st(o, pick(m, v4_ld(ak), v4_ld(bk)));
+    v4_st(o, v4_pick(m, v4_ld(ak), v4_ld(bk)));
 }
 
 /* the chain rule's partial g' a': 0 where g' is 0 (even where a' is not finite) */
@@ -261,7 +255,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         for (size_t g = 0; g < ng; g++) {
             v4d a = v4_ld(av + g * VL);
             v4_st(ov + g * VL, (v4d)((v4i)a & ~sign));
-            v4_st(g1 + g * VL, pick((v4i)(a < zero), -one, keep(one, (v4i)(a > zero))));
+            v4_st(g1 + g * VL, v4_pick((v4i)(a < zero), -one, keep(one, (v4i)(a > zero))));
         }
         break;
     }

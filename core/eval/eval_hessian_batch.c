@@ -38,9 +38,6 @@ static const int DIAG[3] = {0, 3, 5};
 
 INLINE v4d splat(double x) { return (v4d){x, x, x, x}; }
 
-/* a where m is set, else b */
-INLINE v4d pick(v4i m, v4d a, v4d b) { return (v4d)(((v4i)a & m) | ((v4i)b & ~m)); }
-
 INLINE void zero(hj *o)
 {
     o->v = splat(0.0);
@@ -53,11 +50,11 @@ INLINE void zero(hj *o)
 /* *o = a where m is set, else b (min / max: the whole jet of the operand taken) */
 INLINE void pick_jet(hj *o, v4i m, const hj *a, const hj *b)
 {
-    o->v = pick(m, a->v, b->v);
+    o->v = v4_pick(m, a->v, b->v);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-        o->d[k] = pick(m, a->d[k], b->d[k]);
+        o->d[k] = v4_pick(m, a->d[k], b->d[k]);
     _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
-        o->h[k] = pick(m, a->h[k], b->h[k]);
+        o->h[k] = v4_pick(m, a->h[k], b->h[k]);
 }
 
 /* eval_hessian.c's jet_binary (its jet_mul, jet_div) */
@@ -132,9 +129,9 @@ INLINE void unary(const ism_instr *in, hj *o, const hj *a)
     v4i live = ~((v4i)(g1 == splat(0.0)) & (v4i)(g2 == splat(0.0)));
     o->v = g;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-        o->d[k] = pick(live, g1 * a->d[k], splat(0.0));
+        o->d[k] = v4_pick(live, g1 * a->d[k], splat(0.0));
     _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
-        o->h[k] = pick(live, g1 * a->h[k] + g2 * a->d[HI[k]] * a->d[HJ[k]], splat(0.0));
+        o->h[k] = v4_pick(live, g1 * a->h[k] + g2 * a->d[HI[k]] * a->d[HJ[k]], splat(0.0));
 }
 
 /* eval_hessian.c's one_var_op: an instruction whose value depends on variable k alone */
@@ -167,8 +164,8 @@ INLINE void one_var(const ism_instr *in, hj *o, const hj *a, const hj *b, int k)
         v4d g1, g2;
         chain(in, a->v, &v, &g1, &g2);
         v4i live = ~((v4i)(g1 == splat(0.0)) & (v4i)(g2 == splat(0.0)));
-        d = pick(live, g1 * a->d[k], splat(0.0));
-        h = pick(live, g1 * a->h[e] + g2 * a->d[k] * a->d[k], splat(0.0));
+        d = v4_pick(live, g1 * a->d[k], splat(0.0));
+        h = v4_pick(live, g1 * a->h[e] + g2 * a->d[k] * a->d[k], splat(0.0));
         break;
     }
     }

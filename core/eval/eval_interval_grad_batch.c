@@ -41,7 +41,7 @@ _Static_assert(sizeof(vj) == 8 * VL * sizeof(double), "a group's register is 8 v
 /* is_zero: both bounds ±0 */
 INLINE v4i iz(vi u) { return (v4i)((((v4u)u.lo | (v4u)u.hi) << 1) == (v4u){0, 0, 0, 0}); }
 
-INLINE vi vpick(v4i m, vi a, vi b) { return (vi){pick(m, a.lo, b.lo), pick(m, a.hi, b.hi)}; }
+INLINE vi vpick(v4i m, vi a, vi b) { return (vi){v4_pick(m, a.lo, b.lo), v4_pick(m, a.hi, b.hi)}; }
 
 INLINE vi v_div_c(vi a, double c)
 {
@@ -227,7 +227,7 @@ bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
             vi u = {{box[b[0]][k].lo, box[b[1]][k].lo, box[b[2]][k].lo, box[b[3]][k].lo},
                     {box[b[0]][k].hi, box[b[1]][k].hi, box[b[2]][k].hi, box[b[3]][k].hi}};
             v4i ok = u.lo <= u.hi;
-            r[k].v = (vi){pick(ok, u.lo, splat(-INFINITY)), pick(ok, u.hi, splat(INFINITY))};
+            r[k].v = (vi){v4_pick(ok, u.lo, splat(-INFINITY)), v4_pick(ok, u.hi, splat(INFINITY))};
             for (int m = 0; m < 3; m++)
                 r[k].d[m] = m == k ? (vi){splat(1.0), splat(1.0)} : ivz();
         }

@@ -23,9 +23,6 @@ typedef struct vi {
 
 INLINE v4d splat(double x) { return (v4d){x, x, x, x}; }
 
-/* a where m is set, else b */
-INLINE v4d pick(v4i m, v4d a, v4d b) { return (v4d)(((v4i)a & m) | ((v4i)b & ~m)); }
-
 INLINE v4d vabs(v4d x) { return (v4d)((v4u)x & (v4u){~0ull >> 1, ~0ull >> 1, ~0ull >> 1, ~0ull >> 1}); }
 
 /* interval_ops.h's down1 / up1, min / max (ism_min: a < b ? a : b) and nan_to */
@@ -37,9 +34,9 @@ INLINE v4d vup1(v4d x)
 {
     return (x + splat(ISM_ROUND1_ABS)) + vabs(x) * splat(ISM_ROUND1_REL);
 }
-INLINE v4d vmin(v4d a, v4d b) { return pick(a < b, a, b); }
-INLINE v4d vmax(v4d a, v4d b) { return pick(a > b, a, b); }
-INLINE v4d vnan_to(v4d x, double c) { return pick(x == x, x, splat(c)); }
+INLINE v4d vmin(v4d a, v4d b) { return v4_pick(a < b, a, b); }
+INLINE v4d vmax(v4d a, v4d b) { return v4_pick(a > b, a, b); }
+INLINE v4d vnan_to(v4d x, double c) { return v4_pick(x == x, x, splat(c)); }
 
 INLINE vi v_splat(ism_interval u) { return (vi){splat(u.lo), splat(u.hi)}; }
 
@@ -69,8 +66,8 @@ INLINE vi v_mul(vi a, vi b)
 INLINE vi v_square(vi a)
 {
     v4d l2 = a.lo * a.lo, h2 = a.hi * a.hi;
-    v4d inner = pick(a.hi <= splat(0.0), h2, splat(0.0));
-    v4d lo = pick(a.lo >= splat(0.0), l2, inner);
+    v4d inner = v4_pick(a.hi <= splat(0.0), h2, splat(0.0));
+    v4d lo = v4_pick(a.lo >= splat(0.0), l2, inner);
     return (vi){vmax(vdown1(lo), splat(0.0)), vup1(vmax(l2, h2))};
 }
 

@@ -32,4 +32,10 @@ INLINE void v4_st(double *p, v4d v)
     __builtin_memcpy(p, &v, sizeof v);
 }
 
+/* a where m is set, else b (m's lanes all ones or all zeros, as a comparison gives) */
+INLINE v4d v4_pick(v4i m, v4d a, v4d b)
+{
+    return (v4d)(((v4i)a & m) | ((v4i)b & ~m));
+}
+
 #endif

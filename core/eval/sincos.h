@@ -93,12 +93,6 @@ typedef unsigned long long sc_v4u __attribute__((vector_size(4 * sizeof(double))
 /* |x| within ISM_SINCOS_LIMIT (false for NaN) */
 #define SC_NEAR(ax) ((ax) <= ISM_SINCOS_LIMIT)
 
-/* a where m is set, else b */
-INLINE v4d sc_pick(v4i m, v4d a, v4d b)
-{
-    return (v4d)(((v4i)a & m) | ((v4i)b & ~m));
-}
-
 /* One argument. */
 static inline void ism_sincos(double x, double *s, double *c)
 {
@@ -142,7 +136,7 @@ INLINE void ism_sincos4(v4d x, v4d *s, v4d *c)
                  ism_sincos_table[i[3]], 0, e);
     sc_transpose(ism_sincos_table[i[0]], ism_sincos_table[i[1]], ism_sincos_table[i[2]],
                  ism_sincos_table[i[3]], 4, e + 4);
-    *s = sc_pick(x == 0.0, x, SC_SIN(e[0], e[1], e[2], e[6], e[7], r, pt, cm)); /* sin(-0) */
+    *s = v4_pick(x == 0.0, x, SC_SIN(e[0], e[1], e[2], e[6], e[7], r, pt, cm)); /* sin(-0) */
     *c = SC_COS(e[0], e[2], e[3], e[4], e[5], r, pt, cm);
     v4i far = ~SC_NEAR((v4d)((sc_v4u)x & ~sign));
     if (__builtin_expect((far[0] | far[1] | far[2] | far[3]) != 0, 0))

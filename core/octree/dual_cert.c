@@ -247,8 +247,8 @@ typedef struct vmodel {
 /* meet on lanes: max_bound / min_bound's choices */
 INLINE vi vmeet(vi a, vi b)
 {
-    return (vi){pick((a.lo >= b.lo) | (b.lo != b.lo), a.lo, b.lo),
-                pick((a.hi <= b.hi) | (b.hi != b.hi), a.hi, b.hi)};
+    return (vi){v4_pick((a.lo >= b.lo) | (b.lo != b.lo), a.lo, b.lo),
+                v4_pick((a.hi <= b.hi) | (b.hi != b.hi), a.hi, b.hi)};
 }
 
 /* Lane j: *u[j]. */
