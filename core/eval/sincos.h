@@ -27,9 +27,17 @@
  * libm's where f's last bit decides (a root's last step, a tie of max()'s two branches).
  *
  * Cost: one argument ~90 instructions of SSE2 code (glibc's sincos ~60 a call, gyroid ball
- * under callgrind), four in one AVX2 call ~150: the batched evaluators gain (no memo, four
- * lanes at once), the scalar ones' memo misses cost a little more. Gyroid ball at E = 1e-3,
- * one thread, ism_mesh_surface: 2,858.7M instructions with glibc's, 2,741.8M with these.
+ * under callgrind), four in one AVX2 call ~150: the batched evaluators gain (four lanes at
+ * once; the batched gradient also keeps a register's pairs, trig_pair.h's group pairs), the
+ * scalar ones' memo misses cost a little more. Gyroid ball at E = 1e-3, one thread,
+ * ism_mesh_surface: 2,858.7M instructions with glibc's, 2,741.8M with these (667359f),
+ * 2,703.6M with the group pairs (f96a89c).
+ *
+ * Preconditions: the rounding trick (SC_ROUND), the TwoSum tails and "a lane's bits are
+ * ism_sincos's" all need round-to-nearest and no contraction of a * b + c into an FMA. Both
+ * hold by construction today: the Makefile builds with -ffp-contract=off (also ISO C's
+ * default under GCC) and the AVX2 clones target avx2 without fma; nothing here may be called
+ * inside eval_interval_batch.c's directed-rounding region (fesetround there).
  *
  * The interval evaluators do not use this: their bounds stay on libm's sin and cos
  * (interval_ops.h), whose error bound glibc documents (1 ulp), widened by 4 ulp; the measured

@@ -14,15 +14,18 @@
 /* A direct-mapped cache of arguments, kept by the workspace from one evaluation to the next:
  * the polygoniser evaluates f along lattice edges and faces, where two of the three
  * coordinates stay the same from point to point (sin(k*x) repeats), and corners shared by
- * neighbours. 2^ISM_TRIG_CACHE_BITS entries (96 KB) for a tape that takes sines or cosines:
- * gyroid ball at E = 1e-3 (callgrind, ism_mesh_surface, one thread), 4.76M sincos calls with
- * 2^9 entries; the whole run 3,735.5M instructions with 2^9, 3,694.6M with 2^11, 3,679.8M
- * with 2^12, 3,660.5M with 2^13 (a lookup costs ~15 instructions, a call ~63; 2^12 stays
- * well within a core's second-level cache, 1 MB here). 2^ISM_TRIG_CACHE_SMALL_BITS for
- * the others (nothing looks there unless the workspace evaluates another tape): filling 2^13
- * entries cost the sphere at E = 0.0141, 2.86M instructions in all, 9.5% more. Every entry
- * starts as the pair of +0.0, which is what ism_sincos gives there, so no entry is ever
- * invalid.
+ * neighbours. 2^ISM_TRIG_CACHE_BITS entries (96 KB for each of the two tables below, 192 KB
+ * in all, plus the group pairs' ~3.1 KB) for a tape that takes sines or cosines: gyroid ball
+ * at E = 1e-3 (callgrind, ism_mesh_surface, one thread), 4.76M sincos calls with 2^9 entries;
+ * the whole run 3,735.5M instructions with 2^9, 3,694.6M with 2^11, 3,679.8M with 2^12,
+ * 3,660.5M with 2^13 (measured with glibc's sincos: a lookup costs ~15 instructions, a call
+ * ~63; ism_sincos's ~90 a call only favours the memo more; 2^12 tables stay well within a
+ * core's second-level cache, 1 MB here). 2^ISM_TRIG_CACHE_SMALL_BITS for the others (nothing
+ * looks there unless the workspace evaluates another tape): filling 2^13 entries of one table
+ * cost the sphere at E = 0.0141, 2.86M instructions in all, 9.5% more (measured before the
+ * libm table was added; init now fills both tables, twice the entries, not re-measured).
+ * Every entry starts as the pair of +0.0, which is what ism_sincos (and libm) gives there, so
+ * no entry is ever invalid.
  *
  * A second table of as many entries holds libm's pairs for the interval evaluator's bounds
  * (eval_interval.c: sound under glibc's documented error, which ism_sincos's measured one is

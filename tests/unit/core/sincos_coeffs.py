@@ -20,7 +20,7 @@ import sys
 import mpmath as mp
 
 mp.mp.dps = 80
-SPLIT_BITS = 30     # |j| < 2^23 keeps j Q1, j Q2 exact (23 + 30 <= 53)
+SPLIT_BITS = 30     # |j| < 2^23 keeps j Q1, j Q2, j Q3 exact (23 + 30 <= 53)
 N = 256             # table entries over a whole turn
 R = mp.pi / N       # |r| <= pi/256 (plus a rounding's margin)
 
