@@ -33,7 +33,10 @@ JOBS ?= $(shell nproc 2>/dev/null || echo 2)
 
 WARN     := -Wall -Wextra -Werror
 CPPFLAGS := -I. -D_GNU_SOURCE -MMD -MP
-CFLAGS   := -std=c11 $(OPT) $(DEBUG) $(WARN) -pthread
+# -ffp-contract=off: no a * b + c fused into an FMA (ISO C's default under GCC, stated so that
+# a change to gnu11 or an fma clone cannot silently break sincos.h's exact steps and the
+# scalar/lane bit identity)
+CFLAGS   := -std=c11 -ffp-contract=off $(OPT) $(DEBUG) $(WARN) -pthread
 CXXFLAGS := -std=c++17 $(OPT) $(DEBUG) $(WARN) -pthread
 LDFLAGS  := -pthread
 ifeq ($(SAN),1)
