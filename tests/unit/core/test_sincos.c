@@ -12,6 +12,7 @@
 
 #include "core/eval/sincos.h"
 #include "core/eval/eval.h"
+#include "core/eval/workspace.h"
 #include "test_eval_surfaces.h"
 
 /* The bound this file asserts, from the measurement it repeats (10^7 arguments, seed below):
@@ -90,20 +91,27 @@ Test(sincos, closed_forms_and_signs)
     cr_assert(s == 0 && signbit(s) && c == 1.0);
     ism_sincos(0x1p-40, &s, &c);
     cr_assert(s == 0x1p-40 && c == 1.0);
-    /* sin and cos of (k + 1/2) pi/2: (±√½, ±√½) with the signs of the quadrant */
-    const double half = sqrt(0.5);
+    /* the double next to (k + 1/2) pi/2: the quadrant's signs, each value within the bound of
+     * sinl / cosl of that double itself (not of the exact (k + 1/2) pi/2, which the double
+     * misses by up to half its ulp: ~1e-15 at k = -8, as much as the values' own error) */
     const int sign_s[4] = {1, 1, -1, -1}, sign_c[4] = {1, -1, -1, 1};
     for (int k = -8; k < 8; k++) {
-        ism_sincos((k + 0.5) * (M_PI / 2), &s, &c);
+        double x = (k + 0.5) * (M_PI / 2);
+        ism_sincos(x, &s, &c);
         int q = ((k % 4) + 4) % 4;
-        cr_assert(fabs(s - sign_s[q] * half) < 1e-15 && fabs(c - sign_c[q] * half) < 1e-15,
+        cr_assert((s > 0) == (sign_s[q] > 0) && (c > 0) == (sign_c[q] > 0), "k %d", k);
+        cr_assert(ulps(s, sinl(x)) <= SINCOS_MAX_ULP && ulps(c, cosl(x)) <= SINCOS_MAX_ULP,
                   "k %d: %.17g %.17g", k, s, c);
     }
+    /* sin^2 + cos^2 - 1: each value off by at most SINCOS_MAX_ULP of its own ulp (relative
+     * 2^-52 at most), so the two squares by twice that, plus three roundings (two squares and
+     * the sum, 2^-53 each) */
+    const double unit_bound = 2 * SINCOS_MAX_ULP * 0x1p-52 + 3 * 0x1p-53;
     test_rng r = {3};
     for (int i = 0; i < 100000; i++) {
         double x = test_uniform(&r, -1e4, 1e4);
         ism_sincos(x, &s, &c);
-        cr_assert(fabs(s * s + c * c - 1) < 4e-16, "x %a", x);
+        cr_assert(fabs(s * s + c * c - 1) <= unit_bound, "x %a", x);
     }
 }
 
@@ -209,6 +217,13 @@ Test(sincos, kept_group_pairs_serve_only_their_own_arguments)
                       "round %d lane %zu: f %.17g vs %.17g", round, i, f[i], f1);
         }
     }
+    /* and they are served: the same batch again takes no new pair (a miss would advance the
+     * round robin; the gyroid's three trig registers fit the ISM_TRIG_GROUP_PAIRS kept) */
+    double f[N], g[N][3];
+    ism_eval_gradient_batch(t, ws, x, y, z, f, g, N);
+    unsigned next = ws->trig->next_pair;
+    ism_eval_gradient_batch(t, ws, x, y, z, f, g, N);
+    cr_assert_eq(ws->trig->next_pair, next, "a repeated batch computed its pairs again");
     ism_eval_ws_free(ws);
     ism_tape_free(t);
 }
