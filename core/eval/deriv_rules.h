@@ -96,8 +96,9 @@ static inline ism_chain ism_unary_chain(const ism_instr *in, double u)
             r.g2 = -0.5 * r.g1 / u;
         }
         break;
-    case ISM_OP_SIN: ism_sincos(u, &r.g, &r.g1); r.g2 = -r.g; break; /* sincos.h: the */
-    case ISM_OP_COS: ism_sincos(u, &r.g1, &r.g); r.g1 = -r.g1; r.g2 = -r.g; break; /* others' bits */
+    /* sin and cos through sincos.h: the other paths' bits */
+    case ISM_OP_SIN: ism_sincos(u, &r.g, &r.g1); r.g2 = -r.g; break;
+    case ISM_OP_COS: ism_sincos(u, &r.g1, &r.g); r.g1 = -r.g1; r.g2 = -r.g; break;
     case ISM_OP_TAN:
         r.g = tan(u);
         r.g1 = 1.0 + r.g * r.g;

@@ -321,8 +321,14 @@ static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, 
     case ISM_OP_POWI: powi_lanes(out, ra, in->b, ngroups); break;
     case ISM_OP_POWC: RUN_RC(k_powc); break;
     case ISM_OP_SQRT: RUN_R(k_sqrt); break;
-    case ISM_OP_SIN: for (size_t g = 0; g < ngroups; g++) k_trig(out + g * LANES, ra + g * LANES, true); break;
-    case ISM_OP_COS: for (size_t g = 0; g < ngroups; g++) k_trig(out + g * LANES, ra + g * LANES, false); break;
+    case ISM_OP_SIN:
+        for (size_t g = 0; g < ngroups; g++)
+            k_trig(out + g * LANES, ra + g * LANES, true);
+        break;
+    case ISM_OP_COS:
+        for (size_t g = 0; g < ngroups; g++)
+            k_trig(out + g * LANES, ra + g * LANES, false);
+        break;
     case ISM_OP_TAN: RUN_R(k_tan); break;
     case ISM_OP_EXP: RUN_R(k_exp); break;
     case ISM_OP_LOG: RUN_R(k_log); break;

@@ -23,7 +23,10 @@ typedef struct vi {
 
 INLINE v4d splat(double x) { return (v4d){x, x, x, x}; }
 
-INLINE v4d vabs(v4d x) { return (v4d)((v4u)x & (v4u){~0ull >> 1, ~0ull >> 1, ~0ull >> 1, ~0ull >> 1}); }
+INLINE v4d vabs(v4d x)
+{
+    return (v4d)((v4u)x & (v4u){~0ull >> 1, ~0ull >> 1, ~0ull >> 1, ~0ull >> 1});
+}
 
 /* interval_ops.h's down1 / up1, min / max (ism_min: a < b ? a : b) and nan_to */
 INLINE v4d vdown1(v4d x)
@@ -52,7 +55,8 @@ INLINE vi v_mul_c(vi a, double c)
     if (c == 0.0)
         return ivz();
     v4d k = splat(c);
-    return c > 0.0 ? (vi){vdown1(a.lo * k), vup1(a.hi * k)} : (vi){vdown1(a.hi * k), vup1(a.lo * k)};
+    return c > 0.0 ? (vi){vdown1(a.lo * k), vup1(a.hi * k)}
+                   : (vi){vdown1(a.hi * k), vup1(a.lo * k)};
 }
 
 /* iv_mul: the four corner products (a NaN one, 0 × inf, as 0), min / max in min4's order */

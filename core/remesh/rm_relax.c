@@ -370,13 +370,13 @@ static bool idle(rm_pass *p, uint32_t v)
 }
 
 /* Within this many of its fan's mean edges of a given singular point a vertex keeps the
- * least step (ISM_RM_MIN_STEP), not the far one (remesh.c's ISM_RM_FAR_STEP): beside a cusp the vertices two rings and
- * more out, which far_from_features lets take the far step, lie on a tube a few edges
- * across, and their longer idle steps left a needle in the tube (cusp-a2, 1e-3 box: 8.27°,
- * 0.007-0.014 from the cusp) whose merge into the cusp (rm_horn.c) made its cone 1.66°
- * (5.84° before the far step; 6.33° at the cusp). cusp-a2 1e-3 box, the cusp's smallest
- * angle: 6.28° within 5 edges, 6.33° within 10 (the mesh as with the far step nowhere),
- * and the same within 20 and 40. */
+ * least step (ISM_RM_MIN_STEP), not the far one (remesh.c's ISM_RM_FAR_STEP): beside a cusp
+ * the vertices two rings and more out, which far_from_features lets take the far step, lie
+ * on a tube a few edges across, and their longer idle steps left a needle in the tube
+ * (cusp-a2, 1e-3 box: 8.27°, 0.007-0.014 from the cusp) whose merge into the cusp
+ * (rm_horn.c) made its cone 1.66° (5.84° before the far step; 6.33° at the cusp). cusp-a2
+ * 1e-3 box, the cusp's smallest angle: 6.28° within 5 edges, 6.33° within 10 (the mesh as
+ * with the far step nowhere), and the same within 20 and 40. */
 #define ISM_RM_FAR_POINT_EDGES 10.0
 
 /* No vertex of v's fan is locked and no triangle with a corner there is under
