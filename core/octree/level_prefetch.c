@@ -22,8 +22,7 @@
 #define PREFETCH_EDGES 256
 
 /* Node nd's corners as node_corners finds them (corner c at org + (c >> a & 1) steps): their
- * world positions and lattice keys into k (a key is the coordinates' fields + 1, grid.h: a
- * corner's is the origin's plus its offsets in the fields), their memo slots into slot. */
+ * world positions and lattice keys (ism_lattice_key) into k, their memo slots into slot. */
 static void corners_of(ism_point_entry *table, int bits, const ism_grid *g,
                        const ism_node *nd, ism_corners *k, ism_point_entry *slot[8])
 {
@@ -33,15 +32,15 @@ static void corners_of(ism_point_entry *table, int bits, const ism_grid *g,
         w[0][a] = ism_grid_coord(g, a, nd->org[a]);
         w[1][a] = ism_grid_coord(g, a, nd->org[a] + s);
     }
-    uint64_t x = (uint64_t)s << 2 * ISM_LATTICE_KEY_BITS, y = (uint64_t)s << ISM_LATTICE_KEY_BITS,
-             z = (uint64_t)s, key0 = ism_lattice_key(nd->org);
-    const uint64_t off[8] = {0, x, y, x + y, z, x + z, y + z, x + y + z};
     uint64_t mask = ((uint64_t)1 << bits) - 1;
     for (int c = 0; c < 8; c++) {
-        k->p[c][0] = w[c & 1][0];
-        k->p[c][1] = w[(c >> 1) & 1][1];
-        k->p[c][2] = w[(c >> 2) & 1][2];
-        k->key[c] = key0 + off[c];
+        int32_t ip[3];
+        for (int a = 0; a < 3; a++) {
+            int on = (c >> a) & 1;
+            ip[a] = nd->org[a] + on * s;
+            k->p[c][a] = w[on][a];
+        }
+        k->key[c] = ism_lattice_key(ip);
         slot[c] = &table[ism_cache_mix(k->key[c]) & mask];
     }
 }
