@@ -23,7 +23,8 @@
  * core's second-level cache, 1 MB here). 2^ISM_TRIG_CACHE_SMALL_BITS for the others (nothing
  * looks there unless the workspace evaluates another tape): filling 2^13 entries of one table
  * cost the sphere at E = 0.0141, 2.86M instructions in all, 9.5% more (measured before the
- * libm table was added; init now fills both tables, twice the entries, not re-measured).
+ * libm table was added); 2^9 entries in both tables still cost ~4.3K instructions a
+ * workspace, eight workspaces a mesh (the sphere at E = 0.0141: 2.538M -> 2.508M with 2^4).
  * Every entry starts as the pair of +0.0, which is what ism_sincos (and libm) gives there, so
  * no entry is ever invalid.
  *
@@ -34,7 +35,7 @@
  * cos 558K times without a memo (47.5M instructions), 1,833 times (0.24M) through this
  * table. */
 #define ISM_TRIG_CACHE_BITS 12
-#define ISM_TRIG_CACHE_SMALL_BITS 9
+#define ISM_TRIG_CACHE_SMALL_BITS 4
 
 typedef struct ism_trig_entry {
     uint64_t key;

@@ -16,36 +16,63 @@ static bool takes_trig(const ism_tape *t)
     return false;
 }
 
+/* Bytes of n rounded up to whole cache lines (at least one, as ism_line_alloc gives). */
+static size_t whole_lines(size_t n)
+{
+    return (n ? (n + ISM_CACHE_LINE - 1) / ISM_CACHE_LINE : 1) * ISM_CACHE_LINE;
+}
+
+/* The workspace and its arrays are one allocation, each on lines of its own (the
+ * workspace's own first): one aligned_alloc, not twelve (every mesh makes a workspace for
+ * each stage and thread: ~600 instructions of malloc each, ~7K a workspace). None is
+ * cleared: every evaluator writes a register before reading it (the batched evaluators'
+ * lanes past n repeat the last point, eval_double.c), and the trig memo is initialised
+ * whole. */
 ism_eval_ws *ism_eval_ws_new(const ism_tape *t)
 {
     if (!t)
         return NULL;
-    ism_eval_ws *ws = ism_line_alloc(sizeof *ws);
-    if (!ws)
-        return NULL;
-    memset(ws, 0, sizeof *ws);
     size_t n = t->nregs;
     size_t cap = t->origin_len > t->len ? t->origin_len : t->len;
+    unsigned trig_bits = takes_trig(t) ? ISM_TRIG_CACHE_BITS : ISM_TRIG_CACHE_SMALL_BITS;
+    const size_t bytes[] = {
+        sizeof(ism_eval_ws),                      /* the workspace */
+        n * ISM_EVAL_BATCH * sizeof(double),      /* batch */
+        n * sizeof(double),                       /* scalar */
+        n * sizeof(ism_interval),                 /* iv */
+        n * ISM_IV_CHUNK * sizeof(double),        /* iv_lo */
+        n * ISM_IV_CHUNK * sizeof(double),        /* iv_hi */
+        n * sizeof(ism_dual),                     /* dual */
+        n * 4 * ISM_GRAD_BATCH * sizeof(double),  /* gbatch */
+        n * sizeof(ism_jet),                      /* jet */
+        cap,                                      /* choice */
+        n,                                        /* needed */
+        ism_trig_cache_size(trig_bits),           /* trig */
+    };
+    enum { PARTS = sizeof bytes / sizeof bytes[0] };
+    size_t at[PARTS], total = 0;
+    for (int k = 0; k < PARTS; k++) {
+        at[k] = total;
+        total += whole_lines(bytes[k]);
+    }
+    char *block = ism_line_alloc(total);
+    if (!block)
+        return NULL;
+    ism_eval_ws *ws = (ism_eval_ws *)block;
+    memset(ws, 0, sizeof *ws);
     ws->nregs = t->nregs;
     ws->code_cap = cap;
-    ws->batch = ism_line_alloc(n * ISM_EVAL_BATCH * sizeof(double));
-    ws->scalar = ism_line_alloc(n * sizeof *ws->scalar);
-    ws->iv = ism_line_alloc(n * sizeof *ws->iv);
-    ws->iv_lo = ism_line_alloc(n * ISM_IV_CHUNK * sizeof(double));
-    ws->iv_hi = ism_line_alloc(n * ISM_IV_CHUNK * sizeof(double));
-    ws->dual = ism_line_alloc(n * sizeof *ws->dual);
-    ws->gbatch = ism_line_alloc(n * 4 * ISM_GRAD_BATCH * sizeof(double));
-    ws->jet = ism_line_alloc(n * sizeof *ws->jet);
-    ws->choice = ism_line_alloc(cap);
-    ws->needed = ism_line_alloc(n);
-    unsigned trig_bits = takes_trig(t) ? ISM_TRIG_CACHE_BITS : ISM_TRIG_CACHE_SMALL_BITS;
-    ws->trig = ism_line_alloc(ism_trig_cache_size(trig_bits));
-    if (!ws->trig || !ws->batch || !ws->scalar || !ws->iv || !ws->iv_lo || !ws->iv_hi || !ws->dual || !ws->gbatch || !ws->jet || !ws->choice
-        || !ws->needed) {
-        ism_eval_ws_free(ws);
-        return NULL;
-    }
-    memset(ws->batch, 0, n * ISM_EVAL_BATCH * sizeof(double));
+    ws->batch = (double *)(block + at[1]);
+    ws->scalar = (double *)(block + at[2]);
+    ws->iv = (ism_interval *)(block + at[3]);
+    ws->iv_lo = (double *)(block + at[4]);
+    ws->iv_hi = (double *)(block + at[5]);
+    ws->dual = (ism_dual *)(block + at[6]);
+    ws->gbatch = (double *)(block + at[7]);
+    ws->jet = (ism_jet *)(block + at[8]);
+    ws->choice = (uint8_t *)(block + at[9]);
+    ws->needed = (uint8_t *)(block + at[10]);
+    ws->trig = (ism_trig_cache *)(block + at[11]);
     ism_trig_cache_init(ws->trig, trig_bits);
     return ws;
 }
@@ -54,17 +81,6 @@ void ism_eval_ws_free(ism_eval_ws *ws)
 {
     if (!ws)
         return;
-    free(ws->batch);
-    free(ws->scalar);
-    free(ws->iv);
-    free(ws->iv_lo);
-    free(ws->iv_hi);
-    free(ws->dual);
-    free(ws->gbatch);
-    free(ws->jet);
-    free(ws->hbatch);
-    free(ws->choice);
-    free(ws->needed);
-    free(ws->trig);
-    free(ws);
+    free(ws->hbatch); /* made apart, on its first use */
+    free(ws);         /* the block of every other array */
 }
