@@ -111,7 +111,7 @@ static void sample_corners(dual *d, worker *w, const int32_t (*q)[3], size_t n, 
 /* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles). */
 static size_t held_bytes(const dual *d)
 {
-    return d->capn * sizeof *d->n + d->capat * sizeof *d->at +
+    return d->heldn * sizeof *d->n + d->capat * sizeof *d->at +
            d->capv * (3 * sizeof *d->pos + sizeof *d->vleaf + sizeof *d->vtwin);
 }
 
@@ -124,6 +124,8 @@ static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
     }
     if (!grow((void **)&d->n, &d->capn, d->nn + 1, sizeof *d->n))
         return false;
+    if (d->nn + 1 > d->heldn) /* grow's steps, one node at a time */
+        d->heldn = d->heldn ? 2 * d->heldn : ISM_DUAL_FIRST_ROOM;
     *out = (int32_t)d->nn++;
     dnode *n = &d->n[*out];
     memset(n, 0, sizeof *n);
@@ -260,8 +262,10 @@ static uint8_t children_free(const dual *d, worker *w, const dnode *parent, uint
     bool any = false;
     ism_interval x[8], y[8], z[8], out[8];
     for (int c = 0; c < 8; c++) {
-        int lo = SPLIT_OFF[c], neg = __builtin_popcount(neg27 & CHILD_CORNERS[c]);
-        any |= neg == 0 || neg == 8;
+        /* corners of one sign (no popcount: a libgcc call without -mpopcnt) */
+        uint32_t neg = neg27 & CHILD_CORNERS[c];
+        int lo = SPLIT_OFF[c];
+        any |= neg == 0 || neg == CHILD_CORNERS[c];
         x[c] = (ism_interval){p[lo][0], p[lo + 13][0]};
         y[c] = (ism_interval){p[lo][1], p[lo + 13][1]};
         z[c] = (ism_interval){p[lo][2], p[lo + 13][2]};
@@ -624,6 +628,10 @@ static void expand(dual *d, const int32_t *list, size_t n)
                 d->batches += out[k].batched;
                 d->batch_freed += (uint64_t)__builtin_popcount(out[k].batch_free);
             }
+        /* the level's room at once: one node at a time, the tree's doublings copied it
+           over and over (sphere at E 0.00714: 114K instructions of realloc's copying of
+           7.7M); out of memory here, new_node grows node by node */
+        grow((void **)&d->n, &d->capn, d->nn + 8 * n, sizeof *d->n);
         size_t nn = 0;
         for (size_t k = 0; k < n && !d->nomem && !d->too_big; k++) {
             int32_t i = cur[k], first = -1;
@@ -1153,7 +1161,7 @@ static void forget(dual *d)
     d->vleaf = NULL;
     d->vtwin = NULL;
     d->tri = NULL;
-    d->nn = d->capn = d->capat = d->nv = d->capv = d->nt = d->capt = 0;
+    d->nn = d->capn = d->heldn = d->capat = d->nv = d->capv = d->nt = d->capt = 0;
     memset(&d->q, 0, sizeof d->q);
     memset(&d->memo, 0, sizeof d->memo);
     memset(&d->passed, 0, sizeof d->passed);
@@ -1280,6 +1288,18 @@ static enum ism_dual_status run_in_grown_box(dual *d, ism_mesh *mesh, ism_dual_s
     return status;
 }
 
+/* Worker w zeroed but for its sampler's label memo (sampler.h, 40 KB a thread: clearing it
+ * by calloc cost the sphere at E 0.0141 41K of its 2.51M instructions, bench_error under
+ * callgrind): crease_split.c reads that memo only while the sampler's memo_tape is its tape,
+ * and the dual mesher's samplers keep memo_tape NULL. */
+static void worker_clear(worker *w)
+{
+    size_t from = offsetof(worker, s) + offsetof(ism_sampler, label_memo);
+    size_t to = from + sizeof w->s.label_memo;
+    memset(w, 0, from);
+    memset((char *)w + to, 0, sizeof *w - to);
+}
+
 /* Threads for the call: o->threads, or every core (0), at most ISM_MAX_THREADS. */
 static int thread_count(const ism_poly_options *o)
 {
@@ -1305,10 +1325,11 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         ism_cube_edge(e, &d.ec0[e], &d.ec1[e], d.ef[e]);
     d.pool = ism_pool_new(thread_count(o));
     d.nw = d.pool ? ism_pool_threads(d.pool) : 0;
-    d.w = calloc(d.nw ? (size_t)d.nw : 1, sizeof *d.w);
+    d.w = malloc((d.nw ? (size_t)d.nw : 1) * sizeof *d.w);
     bool ok = d.pool && d.w;
     for (int k = 0; ok && k < d.nw; k++) {
         worker *w = &d.w[k];
+        worker_clear(w);
         w->s.tape = f;
         w->s.ws = ism_eval_ws_new(f);
         w->s.batch = !o->scalar_eval; /* the measure's gradients in batches */

@@ -100,6 +100,9 @@ typedef struct dual {
     int nw;
     dnode *n;
     size_t nn, capn;
+    size_t heldn;     /* the node room held_bytes counts against max_memory: what growing one
+                         node at a time holds (capn may be more: expand takes a level's room
+                         at once), so the limit stops the tree where it always did */
     double (*at)[3]; /* by node: the vertex of a node placed FOOT_AT (read only there) */
     size_t capat;
     double *pos;      /* 3 per vertex */
@@ -130,10 +133,11 @@ typedef struct dual {
     enum ism_dual_reason why; /* the first reason bad was set for (mesher.h) */
 } dual;
 
-/* The arrays below start at 64 elements (ism_grow's first allocation). */
+/* The arrays below start at ISM_DUAL_FIRST_ROOM elements (ism_grow's first allocation). */
+#define ISM_DUAL_FIRST_ROOM 64
 static inline bool grow(void **p, size_t *cap, size_t need, size_t size)
 {
-    return ism_grow(p, cap, need, size, 64);
+    return ism_grow(p, cap, need, size, ISM_DUAL_FIRST_ROOM);
 }
 
 static inline void corner_point(const dual *d, const dnode *n, int c, double p[3])
