@@ -108,10 +108,24 @@ static void sample_corners(dual *d, worker *w, const int32_t (*q)[3], size_t n, 
     sample_points(d, w, q, n, f, p, g);
 }
 
-/* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles). */
+/* The room grow leaves for need elements in an array of room cap: what the tree's arrays
+ * would hold grown one node at a time (held_bytes' count; expand takes a level's at once). */
+static size_t room_for(size_t cap, size_t need)
+{
+    if (need <= cap)
+        return cap;
+    size_t n = cap ? cap : ISM_DUAL_FIRST_ROOM;
+    while (n < need)
+        n *= 2;
+    return n;
+}
+
+/* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles), the
+ * tree's arrays as grown one node at a time (heldn, heldat): max_memory stops the tree at the
+ * node it always did. */
 static size_t held_bytes(const dual *d)
 {
-    return d->heldn * sizeof *d->n + d->capat * sizeof *d->at +
+    return d->heldn * sizeof *d->n + d->heldat * sizeof *d->at +
            d->capv * (3 * sizeof *d->pos + sizeof *d->vleaf + sizeof *d->vtwin);
 }
 
@@ -124,8 +138,7 @@ static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
     }
     if (!grow((void **)&d->n, &d->capn, d->nn + 1, sizeof *d->n))
         return false;
-    if (d->nn + 1 > d->heldn) /* grow's steps, one node at a time */
-        d->heldn = d->heldn ? 2 * d->heldn : ISM_DUAL_FIRST_ROOM;
+    d->heldn = room_for(d->heldn, d->nn + 1);
     *out = (int32_t)d->nn++;
     dnode *n = &d->n[*out];
     memset(n, 0, sizeof *n);
@@ -143,6 +156,7 @@ static bool keep_at(dual *d, int32_t i, const double p[3])
         d->nomem = true;
         return false;
     }
+    d->heldat = room_for(d->heldat, (size_t)i + 1);
     memcpy(d->at[i], p, sizeof d->at[i]);
     return true;
 }
@@ -609,9 +623,9 @@ static void expand(dual *d, const int32_t *list, size_t n)
         memcpy(cur, list, n * sizeof *cur);
     while (n && !d->bad && !d->nomem && !d->too_big && !(d->o->cancel && *d->o->cancel)) {
         int32_t *next = malloc(8 * n * sizeof *next);
-        split_out *grown = realloc(out, n * sizeof *out);
-        if (grown)
-            out = grown;
+        free(out); /* the last level's: nothing in it is read again (realloc would copy it) */
+        split_out *grown = malloc(n * sizeof *out);
+        out = grown;
         if (!next || !grown) {
             free(next);
             d->nomem = true;
@@ -628,10 +642,13 @@ static void expand(dual *d, const int32_t *list, size_t n)
                 d->batches += out[k].batched;
                 d->batch_freed += (uint64_t)__builtin_popcount(out[k].batch_free);
             }
-        /* the level's room at once: one node at a time, the tree's doublings copied it
-           over and over (sphere at E 0.00714: 114K instructions of realloc's copying of
-           7.7M); out of memory here, new_node grows node by node */
+        /* the level's room at once (the sag_split vertices' too, where there are any):
+           one node at a time, the tree's doublings copied it over and over (sphere at E
+           0.00714: 114K instructions of realloc's copying of 7.7M); out of memory here,
+           new_node and keep_at grow node by node */
         grow((void **)&d->n, &d->capn, d->nn + 8 * n, sizeof *d->n);
+        if (sag_may_split_any(d))
+            grow((void **)&d->at, &d->capat, d->nn + 8 * n, sizeof *d->at);
         size_t nn = 0;
         for (size_t k = 0; k < n && !d->nomem && !d->too_big; k++) {
             int32_t i = cur[k], first = -1;
@@ -1017,6 +1034,7 @@ static bool to_mesh(dual *d, ism_mesh *mesh)
         }
         task_ctx job = {d, used, nrm, nu};
         ism_pool_for(d->pool, chunks(nu), normal_task, &job, NULL);
+        ok = ism_mesh_reserve(mesh, nu, d->nt); /* at once: one at a time copies */
     }
     for (size_t k = 0; k < nu && ok; k++)
         ok = ism_mesh_add_vertex(mesh, &d->pos[3 * used[k]], &nrm[3 * k]) == k;
@@ -1161,7 +1179,7 @@ static void forget(dual *d)
     d->vleaf = NULL;
     d->vtwin = NULL;
     d->tri = NULL;
-    d->nn = d->capn = d->heldn = d->capat = d->nv = d->capv = d->nt = d->capt = 0;
+    d->nn = d->capn = d->heldn = d->capat = d->heldat = d->nv = d->capv = d->nt = d->capt = 0;
     memset(&d->q, 0, sizeof d->q);
     memset(&d->memo, 0, sizeof d->memo);
     memset(&d->passed, 0, sizeof d->passed);

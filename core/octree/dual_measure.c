@@ -503,6 +503,9 @@ void ism_dual_emit_quads(dual *d)
     if (ok)
         measure_pairs(d, diag, 2 * nd, NULL);
     d->nt = 0;
+    /* two triangles a quad at most before the fans: room at once (add_tri growing one at a
+       time copied the array through its doublings; out of memory here, add_tri grows) */
+    grow((void **)&d->tri, &d->capt, 2 * nq, 3 * sizeof *d->tri);
     for (size_t q = 0; q < nq && ok; q++) {
         const uint32_t *u = &d->q.q[4 * q];
         first[q] = (uint32_t)d->nt;

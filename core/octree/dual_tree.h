@@ -100,11 +100,12 @@ typedef struct dual {
     int nw;
     dnode *n;
     size_t nn, capn;
-    size_t heldn;     /* the node room held_bytes counts against max_memory: what growing one
-                         node at a time holds (capn may be more: expand takes a level's room
-                         at once), so the limit stops the tree where it always did */
     double (*at)[3]; /* by node: the vertex of a node placed FOOT_AT (read only there) */
     size_t capat;
+    size_t heldn, heldat; /* the room of n and at that held_bytes counts against max_memory:
+                             what growing them one node at a time holds (capn and capat may
+                             be more: expand takes a level's room at once), so the limit
+                             stops the tree where it always did */
     double *pos;      /* 3 per vertex */
     int32_t *vleaf;   /* the leaf each vertex belongs to */
     int32_t *vtwin;   /* the next vertex of a leaf sharing this one's point, -1: none (two
