@@ -1,5 +1,6 @@
 /* leaf_memo.c — the leaves of the last max_error round whose output the next round copies:
- * the two trees walked side by side, then every leaf touching a split one struck out. */
+ * the two trees walked side by side, then every leaf sharing an edge segment or a face with a
+ * split one struck out. */
 #include "core/octree/leaf_memo.h"
 #include "core/octree/node_lbox.h"
 #include "core/util/grow.h"
@@ -33,7 +34,8 @@ static void pair(walk *w, int32_t a, int32_t b)
     }
     if (x->state == y->state)
         return; /* both empty */
-    /* a leaf split now (or any other change): whatever touches it may emit otherwise */
+    /* a leaf split now (or any other change): whatever shares a segment with it may emit
+       otherwise */
     if (!ism_grow((void **)&w->split, &w->cap_split, w->nsplit + 1, sizeof *w->split, 64)) {
         w->ok = false;
         return;
@@ -41,7 +43,24 @@ static void pair(walk *w, int32_t a, int32_t b)
     w->split[w->nsplit++] = ism_node_lbox_of(w->before, x);
 }
 
-/* Strikes out the leaves of now under node i that touch box c. */
+/* Do touching boxes b and c share more than a corner: a segment of an edge or more (on some
+ * axis their ranges overlap in more than a point)? */
+static bool share_segment(const ism_node_lbox *b, const ism_node_lbox *c)
+{
+    for (int a = 0; a < 3; a++) {
+        int32_t lo = b->lo[a] > c->lo[a] ? b->lo[a] : c->lo[a];
+        int32_t hi = b->hi[a] < c->hi[a] ? b->hi[a] : c->hi[a];
+        if (hi > lo)
+            return true;
+    }
+    return false;
+}
+
+/* Strikes out the leaves of now under node i that share a segment or a face with box c. One
+ * touching c at a corner alone keeps its output: what a leaf emits depends on its face
+ * tiles (the leaves across its faces) and on the break points registered on its closed box
+ * (breaks_near.h: corners of the leaves touching it), and the only point of c's closed box
+ * on a corner-only neighbour's is that corner, a lattice point whatever c became. */
 static void strike(walk *w, int32_t i, const ism_node_lbox *c)
 {
     const ism_node *nd = &w->now->nodes[i];
@@ -51,7 +70,7 @@ static void strike(walk *w, int32_t i, const ism_node_lbox *c)
     if (nd->state == ISM_NODE_SPLIT)
         for (int k = 0; k < 8; k++)
             strike(w, nd->child + k, c);
-    else
+    else if (share_segment(&b, c))
         w->match[i] = -1;
 }
 

@@ -2,8 +2,11 @@
  * leaf's polygons depend only on what lies in its closed box: its corners and edges, the
  * tiles the leaves across its faces make of them, and the break points other leaves put on
  * its edges and tiles (breaks.h). The next round's tree is this one with some leaves split
- * (octree_build.h, previous), so a leaf of both trees whose closed box touches no leaf
- * split since emits the same triangles, bit for bit: they are copied instead of computed. */
+ * (octree_build.h, previous), so a leaf of both trees whose closed box shares no edge
+ * segment or face with a leaf split since emits the same triangles, bit for bit: they are
+ * copied instead of computed. (A leaf touching a split one at a corner alone keeps its
+ * output: that corner is the only point of the split leaf's box in its own, a lattice point
+ * before and after.) */
 #ifndef ISM_LEAF_MEMO_H
 #define ISM_LEAF_MEMO_H
 
@@ -31,7 +34,8 @@ typedef struct ism_leaf_memo {
 
 /* For each leaf of `now` (leaves in node order), the index of the same leaf among
  * `before`'s leaves when its output may be copied, else -1 (a leaf new in `now`, or one
- * whose closed box touches a leaf of `before` that `now` splits). `now` must be `before`
+ * whose closed box shares an edge segment or a face with a leaf of `before` that `now`
+ * splits). `now` must be `before`
  * with leaves split; reuse holds one entry per leaf of `now`. False when out of memory. */
 bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_t *reuse);
 

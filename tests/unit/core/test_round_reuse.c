@@ -2,8 +2,10 @@
  * decisions, octree_build.h; the triangles of leaves its splits cannot have changed,
  * leaf_memo.h): the mesh and the counters are bit for bit those of rounds computed afresh
  * (fresh_rounds), on one and two threads, while f is evaluated less. The Klein bottle,
- * which crosses itself, √2 − 1 of a finest cell off the lattice; the torus on the lattice
- * (4 rounds) is checked the same way in test_polygonise_accuracy.c. */
+ * which crosses itself, √2 − 1 of a finest cell off the lattice; the gyroid in its ball (a
+ * crease, 5 rounds) in the three placements (tests/unit/placements.h), where the leaves that
+ * touch a split one at a corner alone are copied (leaf_memo.c strike); the torus on the
+ * lattice (4 rounds) is checked the same way in test_polygonise_accuracy.c. */
 #include <criterion/criterion.h>
 #include <string.h>
 #include "poly_fixture.h"
@@ -13,12 +15,18 @@ static const pf_surface klein = {
     "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)",
     NULL, 0, NULL, 0};
 
+static const ism_param gyroid_k[] = {{"k", 4}};
+static const pf_surface gyroid_ball = {
+    "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
+    gyroid_k, 1, NULL, 0};
+
 typedef struct run_case {
     const pf_surface *s;
     double half;      /* the box is [-half, half]^3 shifted by `cells` finest cells */
     double cells;
     double max_error;
     int max_depth;
+    int placement;    /* > -2: the box is pf_sweep_box's placement of that number instead */
 } run_case;
 
 static void run(const ism_tape *t, const run_case *c, int threads, bool fresh, ism_mesh *m,
@@ -30,6 +38,10 @@ static void run(const ism_tape *t, const run_case *c, int threads, bool fresh, i
     for (int k = 0; k < 3; k++) {
         o.box[k] = -c->half + shift;
         o.box[3 + k] = c->half + shift;
+    }
+    if (c->placement > -2) {
+        const double base[6] = {-c->half, -c->half, -c->half, c->half, c->half, c->half};
+        pf_sweep_box(base, c->max_depth, c->placement, o.box);
     }
     o.max_depth = c->max_depth;
     o.max_error = c->max_error;
@@ -78,5 +90,11 @@ static void check(const run_case *c)
 
 Test(round_reuse, klein_bottle_off_the_lattice_as_computed_afresh)
 {
-    check(&(run_case){&klein, 4, PF_IRR, 3e-3, 8});
+    check(&(run_case){&klein, 4, PF_IRR, 3e-3, 8, -2});
+}
+
+Test(round_reuse, gyroid_ball_in_three_placements_as_computed_afresh)
+{
+    for (int which = pf_first_box() - 1; which <= 1; which++)
+        check(&(run_case){&gyroid_ball, 1.5, 0, 1.09e-2, 8, which});
 }
