@@ -36,17 +36,31 @@ bool ism_breaks_build(ism_breaks *b, const ism_octree *t, const uint8_t *take, i
 
 void ism_breaks_free(ism_breaks *b);
 
-/* The registered point p, or NULL. */
-static inline const ism_break_point *ism_breaks_find(const ism_breaks *b, const int32_t p[3])
+/* The registered point of lattice key `key`, whose ism_cache_mix is `hash` (a caller that
+ * looks the point up in other tables too hashes it once), or NULL. */
+static inline const ism_break_point *ism_breaks_find_hashed(const ism_breaks *b, uint64_t key,
+                                                            uint64_t hash)
 {
-    uint64_t key = ism_lattice_key(p);
-    for (size_t s = ism_cache_mix(key) & b->mask;; s = (s + 1) & b->mask) {
+    for (size_t s = hash & b->mask;; s = (s + 1) & b->mask) {
         const ism_break_point *e = &b->slots[s];
         if (e->key == key)
             return e;
         if (!e->key)
             return NULL;
     }
+}
+
+/* The registered point p, or NULL. */
+static inline const ism_break_point *ism_breaks_find(const ism_breaks *b, const int32_t p[3])
+{
+    uint64_t key = ism_lattice_key(p);
+    return ism_breaks_find_hashed(b, key, ism_cache_mix(key));
+}
+
+/* The first slot probed for the point whose key's ism_cache_mix is `hash` (to prefetch). */
+static inline const ism_break_point *ism_breaks_slot(const ism_breaks *b, uint64_t hash)
+{
+    return &b->slots[hash & b->mask];
 }
 
 /* Asks the memory for p's slot (a query follows soon). Always inlined: as a plain static

@@ -70,20 +70,26 @@ typedef struct ism_quiet_tile {
  * (face_lines.c: its lattice points, its sides' break points and roots, f on the tile, which
  * both nodes' shortened tapes give bit for bit on their shared closed face), so the second
  * node that shares the tile copies the first one's lines instead of walking it again. */
-#define ISM_TILE_MEMO_BITS 12 /* 4,096 entries of 352 bytes, 1.4 MB a thread: the two nodes of
+#define ISM_TILE_MEMO_BITS 12 /* 4,096 entries of 288 bytes, 1.2 MB a thread: the two nodes of
                                  a face are polygonised close together (depth first), and the
                                  second walk of a crossed tile then mostly hits */
 #define ISM_TILE_MEMO_LINES 2 /* one curve across the tile, or its chord lifted into two lines
                                  (face_flat.h): nearly every crossed tile; more are walked again */
+/* The counters of ism_cell_stats a tile's walk moves (face_lines.c), counted apart during a
+ * walk and then added to the thread's: what a memo entry adds again on a hit. A walk adds
+ * at most a few to each (its lines are bounded by MAX_CROSS). */
+typedef struct ism_tile_counts {
+    uint32_t crossed_faces, lifted_chords, open_chains, singular_points, double_lines;
+} ism_tile_counts;
+
 typedef struct ism_tile_memo {
     ism_quiet_tile key;    /* the tile (quiet-tile key; where = 0: empty) */
     size_t nlines;
-    ism_cell_stats counted; /* what the walk added to the counters */
+    ism_tile_counts counted; /* what the walk added to the counters */
     ism_fline lines[ISM_TILE_MEMO_LINES];
 } ism_tile_memo;
-/* The size ISM_TILE_MEMO_BITS's comment states (all of ism_cell_stats is kept, though a walk
- * moves only five of its counters). */
-_Static_assert(sizeof(ism_tile_memo) == 352, "ISM_TILE_MEMO_BITS's comment gives 352 bytes");
+/* The size ISM_TILE_MEMO_BITS's comment states. */
+_Static_assert(sizeof(ism_tile_memo) == 288, "ISM_TILE_MEMO_BITS's comment gives 288 bytes");
 
 typedef struct ism_cell_cache {
     ism_lattice_entry *points;
@@ -200,12 +206,22 @@ static inline ism_point_entry *ism_point_slot(ism_point_entry *table, int bits,
     return &table[ism_point_index(bits, ip)];
 }
 
+/* The entry of the lattice point of key `key` (ism_cache_mix(key) = hash: a caller that
+ * looks the point up in other tables too hashes it once) when the table holds it, else NULL. */
+static inline const ism_point_entry *ism_point_find_hashed(const ism_point_entry *table,
+                                                           int bits, uint64_t key,
+                                                           uint64_t hash)
+{
+    const ism_point_entry *e = &table[hash & (((uint64_t)1 << bits) - 1)];
+    return e->key == key ? e : NULL;
+}
+
 /* The entry of lattice point ip when the table holds it, else NULL. */
 static inline const ism_point_entry *ism_point_find(const ism_point_entry *table, int bits,
                                                     const int32_t ip[3])
 {
-    const ism_point_entry *e = &table[ism_point_index(bits, ip)];
-    return e->key == ism_lattice_key(ip) ? e : NULL;
+    uint64_t key = ism_lattice_key(ip);
+    return ism_point_find_hashed(table, bits, key, ism_cache_mix(key));
 }
 
 /* f and ∇f at lattice point ip (world position p): from the table, or computed into it. */

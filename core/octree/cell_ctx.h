@@ -58,6 +58,8 @@ typedef struct ism_cell_ctx {
     ism_tile *zero;           /* the current node's tiles lying in f = 0 */
     size_t nzero, cap_zero;
     ism_cell_stats stats;
+    ism_tile_counts walk;     /* the counters the current tile's walk moved (face_lines.c),
+                                 added to stats when it ends */
     /* the tile memos' hits, kept out of stats (a memo entry copies stats, and a later round's
      * copied leaf adds its stats again): work saved, not a fact of the mesh */
     uint64_t quiet_skips;     /* tiles found in the quiet memo: not walked again */

@@ -13,7 +13,6 @@
  * Everything here depends only on the tile, so both nodes that share it agree, and the
  * second of them copies the first one's lines (cell_cache.h: the tile memo). */
 #include "core/octree/face_lines.h"
-#include "core/octree/cell_stats.h"
 #include "core/octree/face_flat.h"
 #include "core/octree/root_table.h"
 #include "core/octree/singular.h"
@@ -81,10 +80,11 @@ bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, in
     return true;
 }
 
-static ism_lattice_entry *lattice_slot(ism_cell_ctx *cx, const int32_t ip[3])
+/* A lattice point's key hashed once serves every table it is looked up in (the memo below,
+ * the build's corner memo, the break-point registry): each masks ism_cache_mix(key). */
+static ism_lattice_entry *lattice_slot(ism_cell_ctx *cx, uint64_t hash)
 {
-    return &cx->cache.points[ism_cache_mix(ism_lattice_key(ip)) &
-                             (((uint64_t)1 << ISM_POINT_CACHE_BITS) - 1)];
+    return &cx->cache.points[hash & (((uint64_t)1 << ISM_POINT_CACHE_BITS) - 1)];
 }
 
 /* Lattice point ip through the thread's memo: f and ∇f there, and its successors on its
@@ -97,17 +97,18 @@ static ism_lattice_entry *lattice_slot(ism_cell_ctx *cx, const int32_t ip[3])
  * that face's owner never emits: a hole of three zero-length edges at each such point). */
 static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip[3])
 {
-    uint64_t key = ism_lattice_key(ip);
-    ism_lattice_entry *e = lattice_slot(cx, ip);
+    uint64_t key = ism_lattice_key(ip), hash = ism_cache_mix(key);
+    ism_lattice_entry *e = lattice_slot(cx, hash);
     if (e->key != key) {
         double p[3];
-        ism_breaks_prefetch(cx->breaks, ip);
+        __builtin_prefetch(ism_breaks_slot(cx->breaks, hash));
         ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, p);
         e->key = key;
         /* the build's value when it evaluated the point (the same bits: f and ∇f there are
          * pure, and every tape either side uses gives f's own inside its box, sampler.h) */
         const ism_point_entry *c =
-            cx->corners ? ism_point_find(cx->corners, ISM_CORNER_MEMO_BITS, ip) : NULL;
+            cx->corners ? ism_point_find_hashed(cx->corners, ISM_CORNER_MEMO_BITS, key, hash)
+                        : NULL;
         if (c) {
             e->f = c->f;
             memcpy(e->g, c->g, sizeof e->g);
@@ -123,7 +124,7 @@ static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip
         e->round = 0;
     }
     if (e->round != cx->cache.round) { /* f and ∇f from an earlier round still hold */
-        const ism_break_point *b = ism_breaks_find(cx->breaks, ip);
+        const ism_break_point *b = ism_breaks_find_hashed(cx->breaks, key, hash);
         for (int a = 0; a < 3; a++)
             e->next[a] = b ? b->next[a] : ISM_LATTICE_UNREGISTERED;
         e->round = cx->cache.round;
@@ -146,37 +147,33 @@ static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3], const ism_lattice
     return true;
 }
 
-/* Appends one side of the tile in walking order, from its point p (coordinate `from` along
- * `along`) toward `to`, which is left out (it starts the next side): the break points of
- * the lattice line between them, found ascending from the lower end through the registry's
- * successors (one memo lookup a point, each pushed as it is found; a descending side's
- * upper end is looked up first and its points in between reversed after). The lower end
- * is a corner of a non-empty leaf (every side of a tile is an edge of one), so it is
- * registered: false when it is not (a bug; cx->unregistered is then set), or when memory
- * runs out. */
-static bool tile_side(ism_cell_ctx *cx, int along, const int32_t p[3], int32_t from,
-                      int32_t to)
+/* A corner of the tile as the walk needs it: its boundary point and its successors on its
+ * lattice lines (copied: its memo entry may be taken by a later lookup). */
+typedef struct tile_corner {
+    ism_bpoint b;
+    int32_t next[3];
+} tile_corner;
+
+/* Appends the break points strictly between corner c (coordinate lo along `along`, the
+ * side's lower end) and coordinate hi, found ascending through the registry's successors
+ * (one memo lookup a point, each pushed as it is found); reversed after when the side is
+ * walked downward. False when a point the registry gave is unregistered in the memo (a
+ * bug; cx->unregistered is then set), or when memory runs out. */
+static bool side_between(ism_cell_ctx *cx, int along, const tile_corner *c, int32_t hi,
+                         bool up)
 {
-    bool up = from < to;
-    int32_t lo = up ? from : to, hi = up ? to : from;
-    int32_t q[3] = {p[0], p[1], p[2]};
-    if (!up) {
-        q[along] = hi;
-        if (!push_bpoint(cx, q, lattice_entry(cx, q)))
-            return false;
-    }
-    size_t first = cx->nbp; /* a descending side's points between its ends start here */
-    for (q[along] = lo;;) {
+    int32_t q[3] = {c->b.ip[0], c->b.ip[1], c->b.ip[2]};
+    size_t first = cx->nbp;
+    for (int32_t x = c->next[along]; x < hi;) {
+        q[along] = x;
         const ism_lattice_entry *e = lattice_entry(cx, q);
         if (e->next[0] == ISM_LATTICE_UNREGISTERED) {
             cx->unregistered = true;
             return false;
         }
-        if ((up || q[along] != lo) && !push_bpoint(cx, q, e))
+        if (!push_bpoint(cx, q, e))
             return false;
-        if (e->next[along] >= hi)
-            break;
-        q[along] = e->next[along];
+        x = e->next[along];
     }
     for (size_t i = first, j = cx->nbp; !up && i + 1 < j; i++, j--) {
         ism_bpoint b = cx->bp[i];
@@ -186,23 +183,49 @@ static bool tile_side(ism_cell_ctx *cx, int along, const int32_t p[3], int32_t f
     return true;
 }
 
-/* Walks the tile boundary counter-clockwise in (u, v), collecting every break point. */
+static bool push_corner(ism_cell_ctx *cx, const tile_corner *c)
+{
+    if (!ism_grow((void **)&cx->bp, &cx->cap_bp, cx->nbp + 1, sizeof *cx->bp, 64))
+        return false;
+    cx->bp[cx->nbp++] = c->b;
+    return true;
+}
+
+/* Walks the tile boundary counter-clockwise in (u, v), collecting every break point: each
+ * side from its first corner toward the next, which is left out (it starts the next side).
+ * The four corners are looked up once each (a side's points between its corners follow
+ * from its lower corner's successors). A side's lower corner is a corner of a non-empty
+ * leaf (every side of a tile is an edge of one), so it is registered: false when it is not
+ * (a bug; cx->unregistered is then set), or when memory runs out. */
 static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
 {
     int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
     int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
-    cx->nbp = 0;
-    for (int side = 0; side < 4; side++) {
-        int along = side % 2 == 0 ? u : v;
-        int32_t p[3];
-        p[t->axis] = t->plane;
-        p[u] = cu[side];
-        p[v] = cv[side];
-        int32_t to = along == u ? cu[(side + 1) % 4] : cv[(side + 1) % 4];
-        if (!tile_side(cx, along, p, p[along], to))
-            return false;
+    tile_corner c[4];
+    for (int k = 0; k < 4; k++) {
+        int32_t q[3];
+        q[t->axis] = t->plane;
+        q[u] = cu[k];
+        q[v] = cv[k];
+        const ism_lattice_entry *e = lattice_entry(cx, q);
+        memcpy(c[k].b.ip, q, sizeof c[k].b.ip);
+        ism_grid_point(&cx->tree->grid, (ism_ipt){{q[0], q[1], q[2]}}, c[k].b.p);
+        c[k].b.f = e->f;
+        memcpy(c[k].b.g, e->g, sizeof c[k].b.g);
+        c[k].b.gn = e->gn;
+        memcpy(c[k].next, e->next, sizeof c[k].next);
     }
-    return true;
+    /* the sides' lower corners: 0 (sides 0 and 3), 1 (side 1), 3 (side 2) */
+    if (c[0].next[0] == ISM_LATTICE_UNREGISTERED || c[1].next[0] == ISM_LATTICE_UNREGISTERED ||
+        c[3].next[0] == ISM_LATTICE_UNREGISTERED) {
+        cx->unregistered = true;
+        return false;
+    }
+    cx->nbp = 0;
+    return push_corner(cx, &c[0]) && side_between(cx, u, &c[0], t->u1, true) &&
+           push_corner(cx, &c[1]) && side_between(cx, v, &c[1], t->v1, true) &&
+           push_corner(cx, &c[2]) && side_between(cx, u, &c[3], t->u1, false) &&
+           push_corner(cx, &c[3]) && side_between(cx, v, &c[0], t->v1, false);
 }
 
 static bool push_event(ism_cell_ctx *cx, const ism_fpoint *pt, int before, int after, size_t seg)
@@ -774,7 +797,7 @@ static int pair_crossings(ism_cell_ctx *cx, const ism_tile *t, const int *cross,
                 memcpy(lines, kind > 0 ? fm : fp, (size_t)(kind > 0 ? nm : np) * sizeof *lines);
                 return kind > 0 ? nm : np;
             }
-            cx->stats.crossed_faces++;
+            cx->walk.crossed_faces++;
             *has_apex = kind == ISM_PLANE_APEX;
             lines[0] = (pair){cross[0], cross[2]};
             lines[1] = (pair){cross[1], cross[3]};
@@ -826,7 +849,7 @@ static bool emit_regular(ism_cell_ctx *cx, const ism_tile *t, int a, int b)
     ism_fpoint mid;
     if (on_one_side(cx, t, pa->p, pb->p, &axis, &from, &to) &&
         ism_lift_chord(&cx->s, pa, pb, axis, to, &mid)) {
-        cx->stats.lifted_chords++;
+        cx->walk.lifted_chords++;
         return ism_flines_push(&cx->lines, pa, &mid, ISM_LINE_REGULAR) &&
                ism_flines_push(&cx->lines, &mid, pb, ISM_LINE_REGULAR);
     }
@@ -1100,20 +1123,31 @@ void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
         q[t->axis] = t->plane;
         q[u] = cu[c];
         q[v] = cv[c];
-        __builtin_prefetch(lattice_slot(cx, q), 1);
-        ism_breaks_prefetch(cx->breaks, q);
+        uint64_t h = ism_cache_mix(ism_lattice_key(q));
+        __builtin_prefetch(lattice_slot(cx, h), 1);
+        __builtin_prefetch(ism_breaks_slot(cx->breaks, h));
     }
 }
 
-/* The walk's lines (cx->lines from `first`) and counts (against `before`) into memo entry m,
- * when they fit; else m is left as it was. */
+/* Adds counts c to the thread's counters. */
+static void add_counts(ism_cell_ctx *cx, const ism_tile_counts *c)
+{
+    cx->stats.crossed_faces += c->crossed_faces;
+    cx->stats.lifted_chords += c->lifted_chords;
+    cx->stats.open_chains += c->open_chains;
+    cx->stats.singular_points += c->singular_points;
+    cx->stats.double_lines += c->double_lines;
+}
+
+/* The walk's lines (cx->lines from `first`) and counts (cx->walk) into memo entry m, when
+ * they fit; else m is left as it was. */
 static void remember(ism_cell_ctx *cx, ism_tile_memo *m, const ism_quiet_tile *key,
-                     size_t first, const ism_cell_stats *before)
+                     size_t first)
 {
     size_t n = cx->lines.n - first;
     if (n > ISM_TILE_MEMO_LINES)
         return;
-    m->counted = ism_cell_stats_minus(&cx->stats, before);
+    m->counted = cx->walk;
     if (n) /* a walk may add no line, and cx->lines.v is NULL until a first line is pushed */
         memcpy(m->lines, &cx->lines.v[first], n * sizeof *m->lines);
     m->nlines = n;
@@ -1127,11 +1161,12 @@ static bool replay(ism_cell_ctx *cx, const ism_tile_memo *m)
     for (size_t l = 0; l < m->nlines; l++)
         if (!ism_flines_push(&cx->lines, &m->lines[l].a, &m->lines[l].b, m->lines[l].kind))
             return false;
-    ism_cell_stats_add(&cx->stats, &m->counted);
+    add_counts(cx, &m->counted);
     return true;
 }
 
-/* ism_tile_lines's walk of a tile neither memo holds (q: its quiet-tile slot). */
+/* ism_tile_lines's walk of a tile neither memo holds (q: its quiet-tile slot); what it
+ * counts goes to cx->walk (counted_walk adds it to the thread's counters). */
 static bool walk_tile(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_tile *key,
                       ism_quiet_tile *q)
 {
@@ -1204,7 +1239,7 @@ static bool walk_tile(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_tile 
         nc = 0;
     }
     if (nc % 2 == 1) {
-        cx->stats.open_chains++; /* inconsistent signs: drop the last crossing */
+        cx->walk.open_chains++; /* inconsistent signs: drop the last crossing */
         nc--;
     }
     pair lines[MAX_CROSS];
@@ -1214,7 +1249,7 @@ static bool walk_tile(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_tile 
     bool line_used[MAX_CROSS] = {false};
     if (has_apex) {
         /* the two sheets cross at a singular point of the face: all four lines meet there */
-        cx->stats.singular_points++;
+        cx->walk.singular_points++;
         for (int l = 0; l < 2; l++) {
             line_used[l] = true;
             if (!ism_flines_push(&cx->lines, &cx->ev[lines[l].a].pt, &apex, ISM_LINE_REGULAR) ||
@@ -1231,7 +1266,7 @@ static bool walk_tile(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_tile 
                 continue;
             if (double_line_between(cx, t, &cx->ev[touch[i]].pt, &cx->ev[touch[j]].pt)) {
                 touch_used[i] = touch_used[j] = true;
-                cx->stats.double_lines++;
+                cx->walk.double_lines++;
                 if (!emit(cx, touch[i], touch[j], ISM_LINE_DOUBLE) ||
                     !emit(cx, touch[i], touch[j], ISM_LINE_DOUBLE))
                     return false;
@@ -1271,12 +1306,23 @@ static bool walk_tile(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_tile 
     return true;
 }
 
+/* walk_tile with its counts (cx->walk, from zero) added to the thread's counters, whatever
+ * it answers (as when it counted there directly). */
+static bool counted_walk(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_tile *key,
+                         ism_quiet_tile *q)
+{
+    cx->walk = (ism_tile_counts){0, 0, 0, 0, 0};
+    bool ok = walk_tile(cx, t, key, q);
+    add_counts(cx, &cx->walk);
+    return ok;
+}
+
 bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
 {
     cx->zero_tile = false;
     ism_quiet_tile key = quiet_key(t), unused;
     if (cx->walk_every_tile)
-        return walk_tile(cx, t, &key, &unused);
+        return counted_walk(cx, t, &key, &unused);
     uint64_t hash = tile_hash(&key);
     ism_quiet_tile *q = quiet_slot(cx, hash);
     if (q->where == key.where && q->span == key.span) {
@@ -1289,10 +1335,9 @@ bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
         return replay(cx, m); /* walked before: lines cross it */
     }
     size_t first = cx->lines.n;
-    ism_cell_stats before = cx->stats;
-    if (!walk_tile(cx, t, &key, q))
+    if (!counted_walk(cx, t, &key, q))
         return false;
     if (!cx->zero_tile && cx->nev > 0)
-        remember(cx, m, &key, first, &before);
+        remember(cx, m, &key, first);
     return true;
 }

@@ -5,8 +5,9 @@
 
 #include <stdlib.h>
 
-/* The child of split node i (which contains o) that contains o. */
-static int32_t child_toward(const ism_octree *t, int32_t i, const int32_t o[3])
+/* The child of split node i (which contains o) that contains o. Inline: every descent
+ * steps through it (the cells' face tiles, 670,528 steps on the Klein bottle at E 3.27e-3). */
+static inline int32_t child_toward(const ism_octree *t, int32_t i, const int32_t o[3])
 {
     const ism_node *nd = &t->nodes[i];
     int32_t half = ism_grid_cell_steps(&t->grid, nd->level + 1);
@@ -77,7 +78,9 @@ static bool contains(const ism_octree *t, const ism_node *nd, const int32_t o[3]
 }
 
 /* ism_octree_find, from the nearest ancestor of `from` that contains o (the same node:
- * every path to o runs through it); parent NULL: from the root. */
+ * every path to o runs through it); parent NULL: from the root. o lies outside `from` (a
+ * neighbour's origin), so the search starts at its parent; from is no root (the root
+ * contains every point inside_root admits). */
 static int32_t find_near(const ism_octree *t, const int32_t *parent, int32_t from,
                          const int32_t o[3], int level)
 {
@@ -85,7 +88,7 @@ static int32_t find_near(const ism_octree *t, const int32_t *parent, int32_t fro
         return -1;
     if (!parent)
         return descend(t, 0, o, level);
-    int32_t i = from;
+    int32_t i = parent[from];
     while (i > 0 && !contains(t, &t->nodes[i], o))
         i = parent[i];
     return descend(t, i, o, level);
