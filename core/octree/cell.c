@@ -89,8 +89,16 @@ static bool keep_tile(void *ctx, const ism_tile *tile)
     return true;
 }
 
+/* Is tile t the whole face of a node s lattice steps wide (then its corners are the node's)?
+ * A face's tiles are the node's own face or finer leaves' faces (ism_octree_face_tiles). */
+static bool whole_face(const ism_tile *t, int32_t s)
+{
+    return t->u1 - t->u0 == s && t->v1 - t->v0 == s;
+}
+
 /* The tiles of the node's six faces into cx->tiles, face f's from first[f] to first[f + 1],
- * each asked for from memory (ism_tile_prefetch) before any is walked. */
+ * each asked for from memory (ism_tile_prefetch) before any is walked: the node's 8 corners
+ * once, the corners of finer tiles with them. */
 static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
 {
     cx->ntiles = 0;
@@ -100,8 +108,15 @@ static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
             return false;
     }
     first[6] = cx->ntiles;
+    const ism_node *nd = &cx->tree->nodes[node];
+    int32_t s = ism_grid_cell_steps(&cx->tree->grid, nd->level);
+    for (int k = 0; k < 8; k++) {
+        int32_t q[3] = {nd->org[0] + (k & 1 ? s : 0), nd->org[1] + (k & 2 ? s : 0),
+                        nd->org[2] + (k & 4 ? s : 0)};
+        ism_lattice_prefetch(cx, q);
+    }
     for (size_t i = 0; i < cx->ntiles; i++)
-        ism_tile_prefetch(cx, &cx->tiles[i]);
+        ism_tile_prefetch(cx, &cx->tiles[i], !whole_face(&cx->tiles[i], s));
     return true;
 }
 

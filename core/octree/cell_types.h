@@ -59,6 +59,8 @@ typedef struct ism_loops {
 /* One lattice point of a tile's boundary. */
 typedef struct ism_bpoint {
     int32_t ip[3];
+    bool ascending; /* the boundary's segment from here to the next point runs up its lattice
+                       line (the segment's canonical direction: the tile's first two sides) */
     double p[3], f, g[3], gn; /* gn = |g| */
 } ism_bpoint;
 

@@ -134,12 +134,14 @@ static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip
 
 /* Appends a lattice point of the boundary with f and ∇f from its memo entry e (just asked
  * for: the entry is copied before another lookup may take its slot). */
-static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3], const ism_lattice_entry *e)
+static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3], const ism_lattice_entry *e,
+                        bool ascending)
 {
     if (!ism_grow((void **)&cx->bp, &cx->cap_bp, cx->nbp + 1, sizeof *cx->bp, 64))
         return false;
     ism_bpoint *b = &cx->bp[cx->nbp++];
     memcpy(b->ip, ip, sizeof b->ip);
+    b->ascending = ascending;
     ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
     b->f = e->f;
     memcpy(b->g, e->g, sizeof b->g);
@@ -171,7 +173,7 @@ static bool side_between(ism_cell_ctx *cx, int along, const tile_corner *c, int3
             cx->unregistered = true;
             return false;
         }
-        if (!push_bpoint(cx, q, e))
+        if (!push_bpoint(cx, q, e, up))
             return false;
         x = e->next[along];
     }
@@ -209,6 +211,7 @@ static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
         q[v] = cv[k];
         const ism_lattice_entry *e = lattice_entry(cx, q);
         memcpy(c[k].b.ip, q, sizeof c[k].b.ip);
+        c[k].b.ascending = k < 2; /* sides 0 and 1 run up u and v, 2 and 3 down */
         ism_grid_point(&cx->tree->grid, (ism_ipt){{q[0], q[1], q[2]}}, c[k].b.p);
         c[k].b.f = e->f;
         memcpy(c[k].b.g, e->g, sizeof c[k].b.g);
@@ -248,13 +251,11 @@ static ism_fpoint root_point(const ism_root *r, uint8_t flags)
 static void compute_segment(ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi,
                             uint64_t ka, uint64_t kb, ism_seg_roots *out);
 
-/* Is a→b the segment's canonical direction (increasing lattice coordinate)? */
-static bool is_forward(const ism_bpoint *a, const ism_bpoint *b)
+/* Is a→b, a's segment of the boundary, the segment's canonical direction (increasing
+ * lattice coordinate)? Known from the side a lies on (tile_boundary). */
+static bool is_forward(const ism_bpoint *a)
 {
-    for (int k = 0; k < 3; k++)
-        if (a->ip[k] != b->ip[k])
-            return a->ip[k] < b->ip[k];
-    return true;
+    return a->ascending;
 }
 
 static ism_segment_entry *segment_entry(ism_cell_ctx *cx, uint64_t ka, uint64_t kb)
@@ -275,7 +276,7 @@ static bool rootless(const ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpo
  * is rootless and needs none. */
 static bool prefetch_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b)
 {
-    bool forward = is_forward(a, b);
+    bool forward = is_forward(a);
     const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
     if (rootless(cx, lo, hi))
         return false;
@@ -293,7 +294,7 @@ static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint
         out->flags = 0;
         return;
     }
-    bool forward = is_forward(a, b);
+    bool forward = is_forward(a);
     const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
     uint64_t ka = ism_lattice_key(lo->ip), kb = ism_lattice_key(hi->ip);
     ism_segment_entry *e = segment_entry(cx, ka, kb);
@@ -1110,12 +1111,21 @@ static ism_tile_memo *memo_slot(ism_cell_ctx *cx, uint64_t hash)
     return &cx->cache.tiles[hash & (((uint64_t)1 << ISM_TILE_MEMO_BITS) - 1)];
 }
 
-void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
+void ism_lattice_prefetch(ism_cell_ctx *cx, const int32_t ip[3])
+{
+    uint64_t h = ism_cache_mix(ism_lattice_key(ip));
+    __builtin_prefetch(lattice_slot(cx, h), 1);
+    __builtin_prefetch(ism_breaks_slot(cx->breaks, h));
+}
+
+void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t, bool corners)
 {
     ism_quiet_tile key = quiet_key(t);
     uint64_t hash = tile_hash(&key);
     __builtin_prefetch(quiet_slot(cx, hash), 0);
     __builtin_prefetch(memo_slot(cx, hash), 0);
+    if (!corners)
+        return;
     int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
     int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
     for (int c = 0; c < 4; c++) {
@@ -1123,9 +1133,7 @@ void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t)
         q[t->axis] = t->plane;
         q[u] = cu[c];
         q[v] = cv[c];
-        uint64_t h = ism_cache_mix(ism_lattice_key(q));
-        __builtin_prefetch(lattice_slot(cx, h), 1);
-        __builtin_prefetch(ism_breaks_slot(cx->breaks, h));
+        ism_lattice_prefetch(cx, q);
     }
 }
 

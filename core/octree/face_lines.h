@@ -10,11 +10,16 @@
 /* Appends the line a-b of the given kind (enum ism_line_kind); false when out of memory. */
 bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, int kind);
 
+/* Asks the memory for lattice point ip's memo entry and its break-point registry slot (which
+ * a memo miss probes). Changes nothing. */
+void ism_lattice_prefetch(ism_cell_ctx *cx, const int32_t ip[3]);
+
 /* Asks the memory for what ism_tile_lines will read first about this tile (its quiet-tile
- * memo slot, the first cache line of its crossed-tile memo slot, its corners' memo entries
- * and their break-point registry slots, which a memo miss probes): the node's tiles are
- * prefetched together, so that these misses overlap. Changes nothing. */
-void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *tile);
+ * memo slot, the first cache line of its crossed-tile memo slot, and with `corners` its
+ * corners as ism_lattice_prefetch: a caller that asked for them already, as a node's own
+ * corners, passes false): the node's tiles are prefetched together, so that these misses
+ * overlap. Changes nothing. */
+void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *tile, bool corners);
 
 /* Appends to cx->lines the lines of f = 0 on one tile (a face or part of a face): walked, or
  * copied from the thread's memo of tiles walked in the round (cell_cache.h; unless

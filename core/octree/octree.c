@@ -122,6 +122,20 @@ static bool collect_leaves(const ism_octree *t, int32_t i, int axis, int side,
     return true;
 }
 
+/* The node of the neighbour's origin o as find_near answers it, directly when it is node's
+ * sibling across the face (half of a node's faces face into its parent: its child index's
+ * bit along axis differs from side; find_near would step up to the parent and back down). */
+static int32_t face_neighbour(const ism_octree *t, const int32_t *parent, int32_t node,
+                              int axis, int side, const int32_t o[3])
+{
+    if (parent && node > 0) {
+        int32_t first = t->nodes[parent[node]].child, k = node - first;
+        if (((k >> axis) & 1) != side)
+            return first + (k ^ (1 << axis));
+    }
+    return find_near(t, parent, node, o, t->nodes[node].level);
+}
+
 bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t node, int axis,
                            int side, bool (*emit)(void *ctx, const ism_tile *tile), void *ctx)
 {
@@ -129,7 +143,7 @@ bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t n
     int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
     int32_t o[3] = {nd->org[0], nd->org[1], nd->org[2]};
     o[axis] += side ? s : -s;
-    int32_t j = find_near(t, parent, node, o, nd->level);
+    int32_t j = face_neighbour(t, parent, node, axis, side, o);
     ism_tile own = face_of(t, nd, axis, side);
     if (j < 0)
         return emit(ctx, &own); /* the face is on the search box's boundary */
