@@ -161,8 +161,7 @@ typedef struct tile_corner {
  * (one memo lookup a point, each pushed as it is found); reversed after when the side is
  * walked downward. False when a point the registry gave is unregistered in the memo (a
  * bug; cx->unregistered is then set), or when memory runs out. */
-static bool side_between(ism_cell_ctx *cx, int along, const tile_corner *c, int32_t hi,
-                         bool up)
+static bool side_points(ism_cell_ctx *cx, int along, const tile_corner *c, int32_t hi, bool up)
 {
     int32_t q[3] = {c->b.ip[0], c->b.ip[1], c->b.ip[2]};
     size_t first = cx->nbp;
@@ -185,7 +184,15 @@ static bool side_between(ism_cell_ctx *cx, int along, const tile_corner *c, int3
     return true;
 }
 
-static bool push_corner(ism_cell_ctx *cx, const tile_corner *c)
+/* side_points, asked only when the side holds a point between its corners (most sides hold
+ * none: their lower corner's successor is the upper one). */
+static inline bool side_between(ism_cell_ctx *cx, int along, const tile_corner *c, int32_t hi,
+                                bool up)
+{
+    return c->next[along] >= hi || side_points(cx, along, c, hi, up);
+}
+
+static inline bool push_corner(ism_cell_ctx *cx, const tile_corner *c)
 {
     if (!ism_grow((void **)&cx->bp, &cx->cap_bp, cx->nbp + 1, sizeof *cx->bp, 64))
         return false;

@@ -23,6 +23,17 @@ bool ism_cell_out_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx)
     return true;
 }
 
+/* Appends pts[0 .. n), in reverse order when flip, as ism_cell_out_vert would one by one
+ * (one capacity check for the polygon). */
+static bool out_polygon(ism_cell_out *o, const ism_fpoint *pts, size_t n, bool flip)
+{
+    if (!ism_grow((void **)&o->verts, &o->cap_verts, o->nverts + n, sizeof *o->verts, 256))
+        return false;
+    for (size_t i = 0; i < n; i++)
+        o->verts[o->nverts++] = pts[flip ? n - 1 - i : i];
+    return true;
+}
+
 bool ism_cell_out_tri(ism_cell_out *o, uint32_t a, uint32_t b, uint32_t c)
 {
     if (!ism_grow((void **)&o->tris, &o->cap_tris, o->ntris + 1, 3 * sizeof *o->tris, 256))
@@ -422,11 +433,8 @@ bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, doub
     if (n < 3)
         return true;
     size_t base = out->nverts;
-    for (size_t i = 0; i < n; i++) {
-        uint32_t idx;
-        if (!ism_cell_out_vert(out, &pts[flip ? n - 1 - i : i], &idx))
-            return false;
-    }
+    if (!out_polygon(out, pts, n, flip))
+        return false;
     uint32_t b = (uint32_t)base;
     if (n == 3)
         return ism_cell_out_tri(out, b, b + 1, b + 2);
@@ -468,11 +476,8 @@ static bool fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex, bool fl
                 ism_cell_out *out)
 {
     size_t base = out->nverts;
-    for (size_t i = 0; i < n; i++) {
-        uint32_t idx;
-        if (!ism_cell_out_vert(out, &pts[flip ? n - 1 - i : i], &idx))
-            return false;
-    }
+    if (!out_polygon(out, pts, n, flip))
+        return false;
     uint32_t a;
     if (!ism_cell_out_vert(out, apex, &a))
         return false;
