@@ -24,7 +24,16 @@
  * within E / tan θ of it are thin too, and a needle there is merged the same way, on purpose
  * (revB 5): the cone left from the point is measured as the horn's is (its new centroids
  * and midpoints within the bound, the link condition, the end's rules), and its triangles
- * touch the point. In the gallery only horn-cyclide's cones and cusp-a2's (1e-3 box) merge. */
+ * touch the point. In the gallery at the default bound only horn-cyclide's cones merge, in
+ * each of cusp22's five boxes (cusp-a2's 1e-3 box did until bdac44a; at half the bound its
+ * irrational box does).
+ *
+ * A cone's merges stand only while the point keeps the thinnest angle they take or make
+ * (cone_keep_floor): its triangles and those of the cone's vertices within reach, measured
+ * before. The horn's ribbon is thinner than any cone (0.003-0.03° against 0.17-0.84° left,
+ * every box of the sweep); near a cusp the tube's needles are mild and the cone may not be:
+ * cusp-a2 at half the default bound, irrational box, took a 4.36° fan with its needles to a
+ * 3.27° cone (5.02° with the rule); under f3bfebb's far step 8.27° needles to 1.66°. */
 #include "core/remesh/rm_merge.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/vec3.h"
@@ -43,7 +52,8 @@
 #define RM_HORN_THIN 1.0
 /* A merge may make no triangle whose smallest angle's sine is under this (0.057°): the cone's
  * triangles, as thin as the ring's edges are short against its distance from the point
- * (the horn's: 0.6° and more), keep an area that float32 positions hold. */
+ * (the horn's: 0.17° and more), keep an area that float32 positions hold. What a cone may
+ * leave above it is cone_keep_floor's. */
 #define RM_HORN_MIN_SINE 1e-3
 /* A cone takes at most this many merges (revB 4), each asking the link condition over c's
  * fan, which may grow by RM_HORN_RING_MAX triangles at most (a thin ring's size): the horn's
@@ -250,6 +260,17 @@ static bool step_ends_ok(rm_pass *p, const horn_step *s)
     return true;
 }
 
+/* Step s's merge undone (the cone's last standing), v's marks as they were. */
+static void undo_step(rm_pass *p, const horn_step *s)
+{
+    rm_merge_unapply(&p->r, &s->m, s->fan, s->nfan);
+    for (uint32_t j = 0; j < s->nfan; j++)
+        rm_shape_changed(p, s->fan[j]);
+    rm_shape_changed(p, s->m.t1);
+    rm_shape_changed(p, s->m.t2);
+    p->active[s->m.v] = s->active, p->slide[s->m.v] = s->slide;
+}
+
 /* The cone's merges undone, last first, until every triangle they made keeps the end's rules
  * (revB 1: a triangle let pass for a corner a later merge was to take, whose merge was then
  * refused, would stay unchecked); returns how many were undone. Each triangle a merge makes
@@ -265,22 +286,43 @@ static size_t cone_settle(rm_pass *p, horn_step *log, size_t n)
             i++;
         if (i == n)
             return undone;
-        const horn_step *s = log + --n;
-        rm_merge_unapply(&p->r, &s->m, s->fan, s->nfan);
-        for (uint32_t j = 0; j < s->nfan; j++)
-            rm_shape_changed(p, s->fan[j]);
-        rm_shape_changed(p, s->m.t1);
-        rm_shape_changed(p, s->m.t2);
-        p->active[s->m.v] = s->active, p->slide[s->m.v] = s->slide;
+        undo_step(p, log + --n);
         undone++;
     }
 }
 
+/* The thinnest triangle the cone's merges may take or make: c's, and every triangle at a
+ * vertex of cone g (the walk's, from `from` on) within reach of c. */
+static double cone_floor(rm_pass *p, const horn_walk *h, size_t from, uint32_t c, uint32_t g,
+                         double reach)
+{
+    double floor = fan_floor(p, c);
+    for (size_t i = from; i < h->nseen; i++) {
+        uint32_t v = h->seen[i];
+        if (h->tag[v] == g && rm_dist(rm_pos(p, v), rm_pos(p, c)) <= reach)
+            floor = fmin(floor, fan_floor(p, v));
+    }
+    return floor;
+}
+
+/* The cone's last merges undone until c's thinnest triangle is no thinner than `floor`
+ * (cone_floor before the merges: every triangle a merge makes has c as a corner); returns
+ * how many were undone. */
+static size_t cone_keep_floor(rm_pass *p, horn_step *log, size_t n, uint32_t c, double floor)
+{
+    size_t undone = 0;
+    while (n && fan_floor(p, c) < floor) {
+        undo_step(p, log + --n);
+        undone++;
+    }
+    return undone;
+}
+
 /* Merges cone g's thin vertices within reach of c into c, nearest first, at most
  * RM_HORN_MERGES_MAX of them with c keeping at most RM_HORN_RING_MAX triangles more than it
- * had; returns how many stand (cone_settle). */
+ * had; returns how many stand (cone_settle, then cone_keep_floor against `floor`). */
 static size_t merge_cone(rm_pass *p, horn_walk *h, uint32_t c, uint32_t g, double reach,
-                         bool *ok)
+                         double floor, bool *ok)
 {
     const rm_mesh *r = &p->r;
     size_t made = 0;
@@ -319,7 +361,10 @@ static size_t merge_cone(rm_pass *p, horn_walk *h, uint32_t c, uint32_t g, doubl
     }
     while (h->nrefused)
         h->tag[h->refused[--h->nrefused]] = RM_HORN_OUT;
-    return *ok ? made - cone_settle(p, h->log, made) : made;
+    if (!*ok)
+        return made;
+    made -= cone_settle(p, h->log, made);
+    return made - cone_keep_floor(p, h->log, made, c, floor);
 }
 
 /* The farthest corner from c of the needles lying wholly in cone g's thin rings (0: none). */
@@ -390,7 +435,8 @@ size_t rm_horn_tips(rm_pass *p, const ism_remesh_options *o, bool *ok)
             walk_cone(p, &h, c, t0, ++g, thin);
             double reach = needle_reach(p, &h, from, c, g);
             if (reach > 0)
-                made += merge_cone(p, &h, c, g, reach, ok);
+                made += merge_cone(p, &h, c, g, reach, cone_floor(p, &h, from, c, g, reach),
+                                   ok);
         }
     }
     if (!h.tag || !h.seen || !h.refused || !h.log)
