@@ -264,17 +264,19 @@ KERNEL_R(k_square, a[j] * a[j])
 KERNEL_R(k_abs, fabs(a[j]))
 KERNEL_RC(k_powc, ism_powc(a[j], c))
 KERNEL_R(k_sqrt, ism_sqrt_clip(a[j]))
-/* sin or cos (sine: true) of a group, four lanes at a time by sincos.h's own pair: the
- * bits ism_eval_point's memo holds */
+/* sin or cos (sine: true) of a group: the register's pair, computed once for its SIN and its
+ * COS steps (trig_pair.h's group pairs, four lanes at a time by sincos.h's own pair: the bits
+ * ism_eval_point's memo holds) */
+_Static_assert(LANES == ISM_TRIG_GROUP_LANES, "a group pair holds a whole group");
 static inline __attribute__((always_inline)) void k_trig(double *restrict o,
-                                                         const double *restrict a, bool sine)
+                                                         const double *restrict a, bool sine,
+                                                         ism_trig_cache *trig)
 {
+    const ism_trig_group_pair *p = ism_trig_groups(trig, a, LANES / 4);
+    const double *v = sine ? p->s : p->c;
     _Pragma("GCC unroll 8")
-    for (size_t j = 0; j < LANES; j += 4) {
-        v4d s, c;
-        ism_sincos4(v4_ld(a + j), &s, &c);
-        v4_st(o + j, sine ? s : c);
-    }
+    for (size_t j = 0; j < LANES; j += 4)
+        v4_st(o + j, v4_ld(v + j));
 }
 KERNEL_R(k_tan, tan(a[j]))
 KERNEL_R(k_exp, exp(a[j]))
@@ -289,7 +291,8 @@ static void powi_lanes(double *restrict out, const double *restrict ra, unsigned
         ism_powi_lanes(out + g * LANES, ra + g * LANES, n, LANES);
 }
 
-static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, double *regs, size_t ngroups)
+static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, double *regs,
+                                                           ism_trig_cache *trig, size_t ngroups)
 {
     double *out = regs + (size_t)in->out * ISM_EVAL_BATCH;
     const double *ra = regs + (size_t)in->a * ISM_EVAL_BATCH;
@@ -322,12 +325,9 @@ static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, 
     case ISM_OP_POWC: RUN_RC(k_powc); break;
     case ISM_OP_SQRT: RUN_R(k_sqrt); break;
     case ISM_OP_SIN:
-        for (size_t g = 0; g < ngroups; g++)
-            k_trig(out + g * LANES, ra + g * LANES, true);
-        break;
     case ISM_OP_COS:
         for (size_t g = 0; g < ngroups; g++)
-            k_trig(out + g * LANES, ra + g * LANES, false);
+            k_trig(out + g * LANES, ra + g * LANES, in->op == ISM_OP_SIN, trig);
         break;
     case ISM_OP_TAN: RUN_R(k_tan); break;
     case ISM_OP_EXP: RUN_R(k_exp); break;
@@ -344,34 +344,34 @@ static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, 
  * (avx2_clone.h). */
 #if ISM_HAVE_AVX2_CLONE
 ISM_AVX2_CLONE
-static void run_tape_avx2(const ism_tape *t, double *regs, size_t ngroups)
+static void run_tape_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ngroups)
 {
     for (size_t i = 0; i < t->len; i++)
-        batch_op(&t->code[i], regs, ngroups);
+        batch_op(&t->code[i], regs, trig, ngroups);
 }
 #endif
 
-static void run_tape_base(const ism_tape *t, double *regs, size_t ngroups)
+static void run_tape_base(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ngroups)
 {
     for (size_t i = 0; i < t->len; i++)
-        batch_op(&t->code[i], regs, ngroups);
+        batch_op(&t->code[i], regs, trig, ngroups);
 }
 
-static void run_tape(const ism_tape *t, double *regs, size_t ngroups)
+static void run_tape(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ngroups)
 {
 #if ISM_HAVE_AVX2_CLONE
     if (ISM_RUN_AVX2()) {
-        run_tape_avx2(t, regs, ngroups);
+        run_tape_avx2(t, regs, trig, ngroups);
         return;
     }
 #endif
-    run_tape_base(t, regs, ngroups);
+    run_tape_base(t, regs, trig, ngroups);
 }
 
 /* Evaluates n <= ISM_EVAL_BATCH points; lanes past n (up to a whole group) repeat the
  * last point so that they compute harmless values. */
-static void eval_chunk(const ism_tape *t, double *regs, const double *x, const double *y,
-                       const double *z, double *out, size_t n)
+static void eval_chunk(const ism_tape *t, double *regs, ism_trig_cache *trig, const double *x,
+                       const double *y, const double *z, double *out, size_t n)
 {
     size_t ngroups = (n + LANES - 1) / LANES;
     double *in[3] = { regs + ISM_REG_X * ISM_EVAL_BATCH, regs + ISM_REG_Y * ISM_EVAL_BATCH,
@@ -382,7 +382,7 @@ static void eval_chunk(const ism_tape *t, double *regs, const double *x, const d
         for (size_t j = n; j < ngroups * LANES; j++)
             in[k][j] = src[k][n - 1];
     }
-    run_tape(t, regs, ngroups);
+    run_tape(t, regs, trig, ngroups);
     memcpy(out, regs + (size_t)t->result * ISM_EVAL_BATCH, n * sizeof(double));
 }
 
@@ -396,7 +396,7 @@ void ism_eval_batch(const ism_tape *t, ism_eval_ws *ws, const double *x, const d
     }
     for (size_t done = 0; done < n; done += ISM_EVAL_BATCH) {
         size_t k = n - done < ISM_EVAL_BATCH ? n - done : ISM_EVAL_BATCH;
-        eval_chunk(t, ws->batch, x + done, y + done, z + done, out + done, k);
+        eval_chunk(t, ws->batch, ws->trig, x + done, y + done, z + done, out + done, k);
     }
 }
 

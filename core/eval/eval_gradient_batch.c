@@ -14,7 +14,7 @@
 #include "core/eval/avx2_clone.h"
 #include "core/eval/deriv_rules.h"
 #include "core/eval/lanes4.h"
-#include "core/eval/sincos.h"
+#include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
 #include <stdint.h>
 
@@ -115,37 +115,8 @@ INLINE void chain_partials(double *regs, const ism_instr *in, const double *g1v,
     }
 }
 
-/* The sines and cosines of ng groups of arguments av: a pair trig keeps when one holds av's
- * very bits (trig_pair.h's group pairs), else computed four lanes at a time (sincos.h) into
- * the pair next in turn. */
 _Static_assert(ISM_TRIG_GROUP_LANES == GL, "a group pair holds a whole register");
-INLINE const ism_trig_group_pair *trig_groups(ism_trig_cache *trig, const double *av, size_t ng)
-{
-    const size_t n = ng * VL;
-    for (int k = 0; k < ISM_TRIG_GROUP_PAIRS; k++) {
-        const ism_trig_group_pair *p = &trig->pairs[k];
-        if (p->n != n)
-            continue;
-        v4i diff = {0, 0, 0, 0};
-        #pragma GCC unroll 4
-        for (size_t g = 0; g < ng; g++)
-            diff |= (v4i)v4_ld(av + g * VL) ^ (v4i)v4_ld(p->u + g * VL);
-        if (!(diff[0] | diff[1] | diff[2] | diff[3]))
-            return p;
-    }
-    ism_trig_group_pair *p = &trig->pairs[trig->next_pair];
-    trig->next_pair = (trig->next_pair + 1) % ISM_TRIG_GROUP_PAIRS;
-    p->n = n;
-    #pragma GCC unroll 4
-    for (size_t g = 0; g < ng; g++) {
-        v4d u = v4_ld(av + g * VL), s, c;
-        ism_sincos4(u, &s, &c);
-        v4_st(p->u + g * VL, u);
-        v4_st(p->s + g * VL, s);
-        v4_st(p->c + g * VL, c);
-    }
-    return p;
-}
+_Static_assert(VL == 4, "ism_trig_groups' groups are of four lanes");
 
 INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig, size_t ng)
 {
@@ -270,9 +241,9 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         break;
     }
     case ISM_OP_SIN:
-    case ISM_OP_COS: { /* the register's sines and cosines (trig_groups): what the scalar
+    case ISM_OP_COS: { /* the register's sines and cosines (ism_trig_groups): what the scalar
                           evaluator's memo holds for each lane, bit for bit */
-        const ism_trig_group_pair *p = trig_groups(trig, av, ng);
+        const ism_trig_group_pair *p = ism_trig_groups(trig, av, ng);
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
             v4d s = v4_ld(p->s + g * VL), c = v4_ld(p->c + g * VL);

@@ -42,12 +42,14 @@ typedef struct ism_trig_entry {
     double s, c;
 } ism_trig_entry;
 
-/* The batched gradient's last sines and cosines of whole registers (eval_gradient_batch.c),
- * kept by their arguments' bits: a surface takes sin u and cos u of one register at different
- * steps (the gyroid: sin and cos of kx, ky and kz, six steps on three registers), and a
- * register's pair is computed once. ISM_TRIG_GROUP_PAIRS registers: the gyroid's three, and
- * one more. ISM_TRIG_GROUP_LANES: ISM_GRAD_BATCH's (asserted there). Gyroid ball at E = 1e-3
- * (callgrind, as above): the whole run 2,741.8M instructions without them, ~2,703M with. */
+/* The batched evaluators' last sines and cosines of whole registers (eval_gradient_batch.c,
+ * eval_double.c's ism_eval_batch), kept by their arguments' bits: a surface takes sin u and
+ * cos u of one register at different steps (the gyroid: sin and cos of kx, ky and kz, six
+ * steps on three registers), and a register's pair is computed once. ISM_TRIG_GROUP_PAIRS
+ * registers: the gyroid's three, and one more (a power of two: the round robin's index is
+ * masked). ISM_TRIG_GROUP_LANES: ISM_GRAD_BATCH's and a group of ism_eval_batch's (asserted
+ * there). Gyroid ball at E = 1e-3 (callgrind, as above): the whole run 2,741.8M instructions
+ * without them, ~2,703M with. */
 #define ISM_TRIG_GROUP_PAIRS 4
 #define ISM_TRIG_GROUP_LANES 32
 
@@ -73,8 +75,7 @@ static inline void ism_trig_cache_init(ism_trig_cache *m, unsigned bits)
 {
     m->mask = ((uint64_t)1 << bits) - 1;
     m->next_pair = 0;
-    for (int k = 0; k < ISM_TRIG_GROUP_PAIRS; k++)
-        m->pairs[k].n = 0;
+    memset(m->pairs, 0, sizeof m->pairs); /* n = 0: none held (u's first lane read first) */
     for (uint64_t i = 0; i <= 2 * m->mask + 1; i++)
         m->e[i] = (ism_trig_entry){0, 0.0, 1.0}; /* ism_sincos(+0.0), and libm's */
 }
@@ -111,6 +112,47 @@ static inline void ism_trig_pair_libm(ism_trig_cache *m, double u, double *s, do
     }
     *s = e->s;
     *c = e->c;
+}
+
+/* The sines and cosines of ng groups of four arguments av (ng * 4 <= ISM_TRIG_GROUP_LANES):
+ * a pair trig keeps when one holds av's very bits, else computed four lanes at a time
+ * (ism_sincos4) into the pair next in turn; either way each lane is ism_sincos's. A pair is
+ * told apart by its first argument's bits before the rest are compared (a pair of other
+ * arguments nearly always differs there already). */
+_Static_assert((ISM_TRIG_GROUP_PAIRS & (ISM_TRIG_GROUP_PAIRS - 1)) == 0,
+               "the round robin's index is masked");
+INLINE const ism_trig_group_pair *ism_trig_groups(ism_trig_cache *trig, const double *av,
+                                                  size_t ng)
+{
+    const size_t n = ng * 4;
+    uint64_t first;
+    memcpy(&first, av, sizeof first);
+    #pragma GCC unroll 4
+    for (int k = 0; k < ISM_TRIG_GROUP_PAIRS; k++) {
+        const ism_trig_group_pair *p = &trig->pairs[k];
+        uint64_t held;
+        memcpy(&held, p->u, sizeof held);
+        if (held != first || p->n != n)
+            continue;
+        v4i diff = {0, 0, 0, 0};
+        #pragma GCC unroll 8
+        for (size_t g = 0; g < ng; g++)
+            diff |= (v4i)v4_ld(av + g * 4) ^ (v4i)v4_ld(p->u + g * 4);
+        if (!(diff[0] | diff[1] | diff[2] | diff[3]))
+            return p;
+    }
+    ism_trig_group_pair *p = &trig->pairs[trig->next_pair];
+    trig->next_pair = (trig->next_pair + 1) & (ISM_TRIG_GROUP_PAIRS - 1);
+    p->n = n;
+    #pragma GCC unroll 8
+    for (size_t g = 0; g < ng; g++) {
+        v4d u = v4_ld(av + g * 4), s, c;
+        ism_sincos4(u, &s, &c);
+        v4_st(p->u + g * 4, u);
+        v4_st(p->s + g * 4, s);
+        v4_st(p->c + g * 4, c);
+    }
+    return p;
 }
 
 #endif
