@@ -50,25 +50,17 @@
 #include <math.h>
 #include <stdint.h>
 
-/* |x| up to which the reduction above is exact: |j| <= 2^17 128/pi < 2^23 keeps j Q1, j Q2
- * and j Q3 exact doubles (j's 23 bits + Q's 30 <= 53). Beyond (or NaN, ±inf): libm. Tapes see far
- * smaller arguments (a box of a few units times a period's scale). */
-#define ISM_SINCOS_LIMIT 0x1p17
-
-/* pi/128 = Q1 + Q2 + Q3 + Q4 - 2.7e-46 (sincos_coeffs.py). */
-#define SC_Q1 0x1.921fb54000000p-6
-#define SC_Q2 0x1.10b4611800000p-36
-#define SC_Q3 0x1.313198a000000p-67
-#define SC_Q4 0x1.701b839a25205p-98
-#define SC_128_PI 0x1.45f306dc9c883p+5
+/* |x| up to which the reduction above is exact: |j| <= 2^17 128/pi < 2^(17 + 6) keeps j Q1,
+ * j Q2 and j Q3 exact doubles (j's bits + Q's SC_SPLIT_BITS <= 53, asserted). Beyond (or NaN,
+ * ±inf): libm. Tapes see far smaller arguments (a box of a few units times a period's
+ * scale). SC_Q1 .. SC_Q4 (pi/128 = Q1 + Q2 + Q3 + Q4 - 2.7e-46), SC_128_PI and the
+ * polynomials' SC_S1 .. SC_S3, SC_C1, SC_C2: sincos_table.h (generated). */
+#define ISM_SINCOS_LIMIT_BITS 17
+#define ISM_SINCOS_LIMIT ((double)(1ull << ISM_SINCOS_LIMIT_BITS))
+_Static_assert(ISM_SINCOS_LIMIT_BITS + 6 + SC_SPLIT_BITS <= 53,
+               "j = x 128/pi (128/pi < 2^6) times a Q is exact up to ISM_SINCOS_LIMIT");
 /* 1.5 2^52: v + it, for |v| < 2^51, rounds v to an integer held in the sum's low bits */
 #define SC_ROUND 0x1.8p52
-
-#define SC_S1 -0x1.5555555555555p-3 /* -1/6 */
-#define SC_S2 0x1.1111111111111p-7  /* 1/120 */
-#define SC_S3 -0x1.a01a01a01a01ap-13 /* -1/5040 */
-#define SC_C1 0x1.5555555555555p-5  /* 1/24 */
-#define SC_C2 -0x1.6c16c16c16c17p-10 /* -1/720 */
 
 typedef unsigned long long sc_v4u __attribute__((vector_size(4 * sizeof(double))));
 
