@@ -162,6 +162,26 @@ static bool loop_tris(ism_sampler *s, const double (*p)[3], int n, ism_cell_out 
     return true;
 }
 
+/* The root parameter on node edge c0 -> c1 (a single root: ism_single_root_edges), from the
+ * thread's root memo when it holds the edge, else searched (regula falsi) and kept there and
+ * in its log (root_table.h's claim and store, as the level prefetch keeps its lanes' roots). */
+static double edge_root(ism_sampler *s, const ism_corners *k, int c0, int c1)
+{
+    double t;
+    ism_root_entry *m = NULL;
+    if (k->memo) {
+        m = ism_root_slot(k->memo->roots, k->key[c0], k->key[c1]);
+        if (ism_root_memo_find(m, k->key[c0], k->key[c1], &t))
+            return t;
+    }
+    t = ism_regula_falsi(s, k->p[c0], k->p[c1], k->f[c0], k->f[c1]);
+    if (m) {
+        ism_root_claim(m, k->key[c0], k->key[c1]);
+        ism_root_store(m, k->memo->log, k->key[c0], k->key[c1], t);
+    }
+    return t;
+}
+
 /* The node's edge roots, each with the two faces its edge lies on. A corner exactly on the
  * surface is one root, on the two faces the surface enters there (none: it only touches the
  * node; ism_zero_corner_faces). */
@@ -181,23 +201,10 @@ static void edge_roots(ism_sampler *s, const ism_corners *k, double shift, const
         ism_straddle_point(s, shift, box, k->p[c], r[*n].p);
         (*n)++;
     }
-    for (int e = 0; e < 12; e++) {
+    for (unsigned es = ism_single_root_edges(k->f); es; es &= es - 1) { /* in edge order */
         int c0, c1;
-        ism_cube_edge(e, &c0, &c1, r[*n].face);
-        if (k->f[c0] == 0 || k->f[c1] == 0 || (k->f[c0] < 0) == (k->f[c1] < 0))
-            continue; /* no root, or the corner's (above) */
-        double t;
-        ism_root_entry *m =
-            k->memo ? ism_root_slot(k->memo->roots, k->key[c0], k->key[c1]) : NULL;
-        if (m && m->a == k->key[c0] && m->b == k->key[c1]) {
-            t = m->t;
-        } else {
-            t = ism_regula_falsi(s, k->p[c0], k->p[c1], k->f[c0], k->f[c1]);
-            if (m)
-                *m = (ism_root_entry){k->key[c0], k->key[c1], t};
-            if (m && k->memo->log)
-                ism_root_log_push(k->memo->log, k->key[c0], k->key[c1], t);
-        }
+        ism_cube_edge(__builtin_ctz(es), &c0, &c1, r[*n].face);
+        double t = edge_root(s, k, c0, c1);
         double p[3];
         for (int a = 0; a < 3; a++)
             p[a] = k->p[c0][a] + t * (k->p[c1][a] - k->p[c0][a]);

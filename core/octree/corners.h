@@ -34,6 +34,44 @@ static inline void ism_cube_edge(int e, int *c0, int *c1, int faces[2])
     faces[1] = t[3];
 }
 
+/* The edges (bit e of the result) of per-axis corner masks x, y, z: bit c of x marks edge
+ * c -> c | 1 (c0 = 0, 2, 4, 6: edges 0..3), of y edge c -> c | 2 (c0 = 0, 4, 1, 5: edges 4..7),
+ * of z edge c -> c | 4 (c0 = 0..3: edges 8..11), ism_cube_edges' order. */
+static inline unsigned ism_edge_bits(unsigned x, unsigned y, unsigned z)
+{
+    unsigned ex = (x & 1) | (x >> 1 & 2) | (x >> 2 & 4) | (x >> 3 & 8);
+    unsigned ey = (y & 1) | (y >> 3 & 2) | (y << 1 & 4) | (y >> 2 & 8);
+    return ex | ey << 4 | (z & 0xf) << 8;
+}
+
+/* The edges whose two corners differ in corner mask m (bit c: corner c), e.g. those a sign
+ * change crosses when m marks the corners below 0: the 12-edge loop's test in three shifts
+ * (the build's root prefetch asks it of every tested node). */
+static inline unsigned ism_edges_across(unsigned m)
+{
+    return ism_edge_bits((m ^ m >> 1) & 0x55, (m ^ m >> 2) & 0x33, (m ^ m >> 4) & 0x0f);
+}
+
+/* The edges with at least one corner in corner mask m. */
+static inline unsigned ism_edges_touching(unsigned m)
+{
+    return ism_edge_bits((m | m >> 1) & 0x55, (m | m >> 2) & 0x33, (m | m >> 4) & 0x0f);
+}
+
+/* The edges holding a single root of f between their corners (f's 8 values): a sign change
+ * with neither end 0 (a corner on f = 0 is a root of its own: ism_zero_corner_faces). NaN
+ * reads as positive. The rule of the flatness test's edge roots (cell_error.c) and of the
+ * build's prefetch of them (level_prefetch.c). */
+static inline unsigned ism_single_root_edges(const double f[8])
+{
+    unsigned neg = 0, zero = 0;
+    for (int c = 0; c < 8; c++) {
+        neg |= (unsigned)(f[c] < 0) << c;
+        zero |= (unsigned)(f[c] == 0) << c;
+    }
+    return ism_edges_across(neg) & ~ism_edges_touching(zero);
+}
+
 /* Corner c where f is exactly 0 (a lattice point on the surface, its gradient not zero): the
  * faces (bit face) the surface enters there, those whose two edges at c lead to corners of
  * opposite signs (f ≈ ∇f · (q − c) near c: where both lead to one sign the face's quadrant

@@ -38,6 +38,35 @@ typedef struct ism_root_log {
 void ism_root_log_push(ism_root_log *l, uint64_t a, uint64_t b, double t);
 void ism_root_log_free(ism_root_log *l);
 
+/* The thread's root memo (cell_cache.h ism_root_slot's direct-mapped slots) as the build's
+ * two searchers of edge roots use it, the flatness test's (cell_error.c) and the level
+ * prefetch's (level_prefetch.c): a slot answers edge a -> b when it holds both keys; a search
+ * claims its slot first (a prefetch gathers many edges before it searches them, and an edge
+ * met again meanwhile is not gathered twice), then stores its root where the slot still
+ * holds the edge (a later claim took it over: the root is only logged) and logs it. */
+static inline bool ism_root_memo_find(const ism_root_entry *slot, uint64_t a, uint64_t b,
+                                      double *t)
+{
+    if (slot->a != a || slot->b != b)
+        return false;
+    *t = slot->t;
+    return true;
+}
+
+static inline void ism_root_claim(ism_root_entry *slot, uint64_t a, uint64_t b)
+{
+    *slot = (ism_root_entry){a, b, 0};
+}
+
+static inline void ism_root_store(ism_root_entry *slot, ism_root_log *log, uint64_t a,
+                                  uint64_t b, double t)
+{
+    if (slot->a == a && slot->b == b)
+        slot->t = t;
+    if (log)
+        ism_root_log_push(log, a, b, t);
+}
+
 typedef struct ism_root_table {
     ism_root_entry *slots; /* linear probing; a = 0 marks an empty slot (a lattice key is
                               never 0: grid.h ism_lattice_key) */

@@ -44,3 +44,22 @@ Test(corners, cube_edges_in_the_documented_order)
         cr_expect_eq(faces[1], o2 * 2 + (r >> 1 & 1), "edge %d: face %d", e, faces[1]);
     }
 }
+
+/* ism_edges_across / ism_edges_touching against the edge table read one edge at a time, for
+ * every corner mask: an edge is across m when exactly one of its corners is in m, touching
+ * when at least one is (a packing that swaps two edges or drops a bit fails here). */
+Test(corners, edge_masks_are_the_table_read_edge_by_edge)
+{
+    for (unsigned m = 0; m < 256; m++) {
+        unsigned across = 0, touching = 0;
+        for (int e = 0; e < 12; e++) {
+            int c0, c1, faces[2];
+            ism_cube_edge(e, &c0, &c1, faces);
+            unsigned in0 = m >> c0 & 1, in1 = m >> c1 & 1;
+            across |= (in0 ^ in1) << e;
+            touching |= (in0 | in1) << e;
+        }
+        cr_expect_eq(ism_edges_across(m), across, "mask %#x", m);
+        cr_expect_eq(ism_edges_touching(m), touching, "mask %#x", m);
+    }
+}
