@@ -65,6 +65,7 @@ static inline unsigned ism_edges_touching(unsigned m)
 static inline unsigned ism_single_root_edges(const double f[8])
 {
     unsigned neg = 0, zero = 0;
+#pragma GCC unroll 8 /* a loop of 8 compares at -O2: ~180 instructions a node (prefetch) */
     for (int c = 0; c < 8; c++) {
         neg |= (unsigned)(f[c] < 0) << c;
         zero |= (unsigned)(f[c] == 0) << c;

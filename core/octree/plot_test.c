@@ -477,9 +477,8 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
 {
     if (blind)
         *blind = false;
-    double p[8][3], f[8], n[8][3];
-    memcpy(p, k->p, sizeof p);
-    memcpy(f, k->f, sizeof f);
+    const double (*p)[3] = k->p, *f = k->f;
+    double n[8][3];
     memcpy(n, k->g, sizeof n);
     bool critical = false; /* a corner where ∇f vanishes (or is undefined) */
     for (int c = 0; c < 8; c++) {
@@ -522,23 +521,28 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
 
     double roots[12][3], centroid[3] = {0, 0, 0};
     int nroots = 0, face_cross[6] = {0}, ndisagree = 0, disagree[12];
-    for (int e = 0; e < 12; e++) {
-        int c0, c1, faces[2];
-        ism_cube_edge(e, &c0, &c1, faces);
-        if (f[c0] == 0 || f[c1] == 0)
-            continue; /* no root here (the edge lies in f = 0), or the corner's (below) */
-        bool crosses = (f[c0] < 0) != (f[c1] < 0);
-        if (!crosses) {
-            /* signs agree, gradients do not: maybe two roots (a small node under an error
-             * bound leaves them to the edge roots and the measurement, below) */
-            if (ism_dot3(n[c0], n[c1]) <= fl->gradient_test) {
-                if (!measured_only && !graph)
-                    return false;
-                allowed |= measured_only;
-                disagree[ndisagree++] = e;
-            }
-            continue;
+    unsigned neg = 0, zero = 0; /* the corners below 0, at 0 */
+    for (int c = 0; c < 8; c++) {
+        neg |= (unsigned)(f[c] < 0) << c;
+        zero |= (unsigned)(f[c] == 0) << c;
+    }
+    /* an edge with a corner at 0 has no root here (the edge lies in f = 0), or the corner's
+     * (below); of the others, those of one sign first, in edge order */
+    unsigned off_zero = 0xfffu & ~ism_edges_touching(zero);
+    for (unsigned es = off_zero & ~ism_edges_across(neg); es; es &= es - 1) {
+        int e = __builtin_ctz(es), c0 = ism_cube_edges[e][0], c1 = ism_cube_edges[e][1];
+        /* signs agree, gradients do not: maybe two roots (a small node under an error
+         * bound leaves them to the edge roots and the measurement, below) */
+        if (ism_dot3(n[c0], n[c1]) <= fl->gradient_test) {
+            if (!measured_only && !graph)
+                return false;
+            allowed |= measured_only;
+            disagree[ndisagree++] = e;
         }
+    }
+    for (unsigned es = off_zero & ism_edges_across(neg); es; es &= es - 1) { /* crossed */
+        int c0, c1, faces[2];
+        ism_cube_edge(__builtin_ctz(es), &c0, &c1, faces);
         /* One secant step is enough to judge flatness: the exact roots come later. */
         double t = f[c0] / (f[c0] - f[c1]); /* neither is 0 (above) */
         for (int a = 0; a < 3; a++) {
