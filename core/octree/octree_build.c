@@ -1,8 +1,11 @@
 /* octree_build.c — the subdivision of the search box: the top two levels on the calling
  * thread, then one task per level-2 node on the worker threads, each growing its subtree
- * in its own node array; the arrays are joined in task order afterwards (each copied to its
- * place, known from a prefix sum, on the threads). */
+ * in its own node array, depth first (grow) or a level at a time (level_build.c, where a
+ * node's decision is its own); the arrays are joined in task order afterwards (each copied
+ * to its place, known from a prefix sum, on the threads). The state both ways share:
+ * build_state.h. */
 #include "core/octree/octree_build.h"
+#include "core/octree/build_state.h"
 #include "core/octree/sampler.h"
 #include "core/octree/cell_cache.h"
 #include "core/octree/crease_memo.h"
@@ -10,7 +13,6 @@
 #include "core/octree/edge_roots.h"
 #include "core/octree/face_memo.h"
 #include "core/octree/leaf_tapes.h"
-#include "core/octree/level_prefetch.h"
 #include "core/octree/node_balls.h"
 #include "core/octree/quiet.h"
 #include "core/octree/root_table.h"
@@ -29,102 +31,26 @@
 #include <string.h>
 
 #define TOP_LEVEL 2
-/* A thread adds its new nodes to the shared count (the max_nodes budget) in batches this
- * large: one shared write per 512 splits instead of one per split, at the price of
- * exceeding the budget by at most this many nodes per thread before the build stops. A
- * subtree copied whole (copy_subtree) is counted at once, before it is allocated. */
-#define NODE_BATCH 4096
-
-typedef struct node_vec {
-    ism_node *v;
-    size_t n, cap;
-    uint16_t *tape;  /* beside v when the build shortens tapes: octree.h's tape_of */
-    size_t tape_cap;
-} node_vec;
-
-/* Nodes at the top levels left for the worker threads: each with the depth its subtree may
- * reach (see grow). */
-typedef struct deferral {
-    size_t node;
-    int limit;
-    int32_t previous; /* the node in the last round's tree, or -1 */
-} deferral;
-
+/* The nodes of one top level left for tasks (grow's defer). */
 typedef struct defer_list {
     int level;
     deferral *v;
     size_t n;
 } defer_list;
 
-typedef struct thread_state {
-    alignas(ISM_CACHE_LINE) ism_sampler s; /* threads' states in lines of their own: each
-                                              writes its counters for every node */
-    ism_point_entry *corners; /* memo of f and ∇f at lattice points (pure: never stale) */
-    ism_node_memo memo;       /* memo of roots on node edges and crease labels at corners
-                                 (cell_cache.h; pure too) */
-    ism_tape *tapes[ISM_GRID_MAX_DEPTH + 1];
-    /* tapes[l]'s number in build.leaf_tapes, known while written[l] == numbered[l]: the
-     * leaves below one shortening share it without a lookup */
-    uint32_t written[ISM_GRID_MAX_DEPTH + 1], numbered[ISM_GRID_MAX_DEPTH + 1];
-    uint16_t number[ISM_GRID_MAX_DEPTH + 1];
-    ism_leaf_tapes_cache tape_cache; /* this thread's hits in build.leaf_tapes */
-    ism_thin_ws thin;         /* the hidden-piece search's scratch */
-    ism_face_memo faces;      /* its verdicts on faces, for the node across (face_memo.h) */
-    ism_root_log roots;       /* the roots memo.roots was filled with (root_table.h) */
-    uint64_t visited, excluded, unresolved;
-    uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
-    uint64_t tape_misses;     /* leaves whose shortened tape found no room in leaf_tapes */
-    uint64_t copied;          /* nodes copy_subtree wrote */
-    size_t new_nodes;         /* made since the last batch went to build.nodes_total */
-} thread_state;
-
-typedef struct build {
-    const ism_octree_build_params *p;
-    const ism_grid *grid;
-    ism_quiet quiet;             /* index of p->quiet */
-    ism_node_balls node_balls;   /* index of p->node_balls */
-    const ism_octree *previous;  /* p->previous when it may be used, else NULL */
-    uint8_t *forced_below;       /* per node of previous: 1 when a force_split key's descent
-                                    passes it (copy_subtree); NULL: no subtree copied */
-    thread_state *threads;
-    ism_point_entry *corner_memos; /* the threads' memos, end to end (thread_state.corners):
-                                      p->corner_memos, or the build's own */
-    ism_root_entry *root_memos;    /* ... and thread_state.memo's */
-    ism_pair_entry *pair_memos;
-    ism_label_entry *label_memos;
-    int shortening;
-    ism_leaf_tapes leaf_tapes;   /* the leaves' shortened tapes (octree.h) */
-    /* written rarely, read by every node; the counters below live on lines of their own */
-    atomic_int failed;           /* an enum ism_build_status other than OK */
-    alignas(ISM_CACHE_LINE) atomic_size_t nodes_total; /* in batches (NODE_BATCH) */
-    deferral *tasks;             /* node index (in the top array) and limit of each task */
-    node_vec *task_out;          /* each task's subtree; [0] is the task's node itself */
-    alignas(ISM_CACHE_LINE) atomic_size_t tasks_done;
-    size_t ntasks;
-    pthread_mutex_t progress_lock;
-} build;
-
 /* Room for extra more nodes (and their tape numbers when the build keeps them). */
-static bool vec_reserve(const build *b, node_vec *v, size_t extra)
+bool ism_build_vec_reserve(const build *b, node_vec *v, size_t extra)
 {
     return ism_grow((void **)&v->v, &v->cap, v->n + extra, sizeof *v->v, 256) &&
            (!b->shortening ||
             ism_grow((void **)&v->tape, &v->tape_cap, v->n + extra, sizeof *v->tape, 256));
 }
 
-/* Appends nd (room reserved) with its tape number. */
-static void vec_put(node_vec *v, const ism_node *nd, uint16_t tape)
-{
-    if (v->tape)
-        v->tape[v->n] = tape;
-    v->v[v->n++] = *nd;
-}
-
 static bool vec_push(const build *b, node_vec *v, const ism_node *nd, uint16_t tape)
 {
-    if (!vec_reserve(b, v, 1))
+    if (!ism_build_vec_reserve(b, v, 1))
         return false;
-    vec_put(v, nd, tape);
+    ism_build_vec_put(v, nd, tape);
     return true;
 }
 
@@ -145,8 +71,8 @@ static void node_box(const ism_grid *g, const ism_node *nd, double lo[3], double
 
 /* Interval of f over the node; writes a shortened tape into th->tapes[level] when the box
  * proves min/max branches dominated, and returns the tape to use below this node. */
-static const ism_tape *node_range(build *b, thread_state *th, const ism_node *nd,
-                                  const ism_tape *tape, ism_interval *range)
+const ism_tape *ism_build_node_range(build *b, thread_state *th, const ism_node *nd,
+                                     const ism_tape *tape, ism_interval *range)
 {
     double lo[3], hi[3];
     node_box(b->grid, nd, lo, hi);
@@ -183,7 +109,7 @@ static void node_corners(const ism_grid *g, thread_state *th, const ism_tape *ta
     th->s.tape = saved;
 }
 
-static bool fail(build *b, enum ism_build_status st)
+bool ism_build_fail(build *b, enum ism_build_status st)
 {
     int expected = ISM_BUILD_OK;
     atomic_compare_exchange_strong(&b->failed, &expected, (int)st);
@@ -193,12 +119,12 @@ static bool fail(build *b, enum ism_build_status st)
 /* Adds the thread's new nodes to the shared count; false (and the build failed) beyond
  * max_nodes. Whether the whole tree fits does not depend on the batching: every node is
  * counted by the end of its task. */
-static bool count_nodes(build *b, thread_state *th)
+bool ism_build_count_nodes(build *b, thread_state *th)
 {
     size_t n = th->new_nodes;
     th->new_nodes = 0;
     if (atomic_fetch_add(&b->nodes_total, n) + n > b->p->max_nodes)
-        return fail(b, ISM_BUILD_TOO_BIG);
+        return ism_build_fail(b, ISM_BUILD_TOO_BIG);
     return true;
 }
 
@@ -231,19 +157,11 @@ static bool near_node(const build *b, const ism_node *nd)
 
 /* Is fresh node nd split whatever its test says: a force_split key (its emitted triangles
  * missed max_error last round) above depth.max, or in a node ball (near_node)? */
-static bool forced_split(const build *b, const ism_node *nd)
+bool ism_build_forced_split(const build *b, const ism_node *nd)
 {
     return (nd->level < b->p->max_depth &&
             ism_split_set_has(b->p->force_split, ism_node_key(nd))) ||
            near_node(b, nd);
-}
-
-/* Child k of nd as a split appends it: undecided (a leaf until decided). */
-static ism_node child_node(const build *b, const ism_node *nd, int k)
-{
-    ism_node c = {{0, 0, 0}, -1, (uint8_t)(nd->level + 1), ISM_NODE_LEAF, 0, 0};
-    ism_child_origin(b->grid, nd, k, c.org);
-    return c;
 }
 
 /* A search's verdict, with the counts ism_node.thin keeps (searches, undecided: searches
@@ -582,13 +500,13 @@ static bool take_over(build *b, thread_state *th, node_vec *v, size_t i, int32_t
 }
 
 /* The intervals of node nd's 8 children over tape, in one batched call (the same bounds
- * node_range finds child by child when it does not shorten). */
-static void children_ranges(build *b, thread_state *th, const ism_node *nd,
-                            const ism_tape *tape, ism_interval range[8])
+ * ism_build_node_range finds child by child when it does not shorten). */
+void ism_build_children_ranges(build *b, thread_state *th, const ism_node *nd,
+                               const ism_tape *tape, ism_interval range[8])
 {
     ism_interval box[3][8];
     for (int k = 0; k < 8; k++) {
-        ism_node c = child_node(b, nd, k);
+        ism_node c = ism_build_child(b, nd, k);
         double lo[3], hi[3];
         node_box(b->grid, &c, lo, hi);
         for (int a = 0; a < 3; a++)
@@ -713,10 +631,10 @@ static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int3
 {
     const ism_octree *t = b->previous;
     size_t from = (size_t)t->nodes[pi].child, end = subtree_end(t, pi), n = end - from;
-    if ((th->new_nodes += n) >= NODE_BATCH && !count_nodes(b, th))
+    if ((th->new_nodes += n) >= NODE_BATCH && !ism_build_count_nodes(b, th))
         return false;
-    if (!vec_reserve(b, v, n))
-        return fail(b, ISM_BUILD_NO_MEMORY);
+    if (!ism_build_vec_reserve(b, v, n))
+        return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
     int32_t shift = (int32_t)v->n - (int32_t)from;
     v->v[i].state = ISM_NODE_SPLIT;
     v->v[i].child = (int32_t)v->n;
@@ -740,7 +658,7 @@ static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int3
         } else {
             th->excluded++;
         }
-        vec_put(v, &c, tape);
+        ism_build_vec_put(v, &c, tape);
     }
     th->visited += n;
     th->copied += n;
@@ -752,7 +670,7 @@ static bool copy_subtree(build *b, thread_state *th, node_vec *v, size_t i, int3
  * copy_subtree), or all of them when there are node balls, and a reached subtree may still
  * be taken over node by node and evaluate nothing, yet its split nodes shortened their
  * tapes again (Barth's sextic at E 1e-2: 17M of each later round's ~65M octree). `tape` is the node's once resolved (NULL
- * before); its parent's is `above` when that is itself pending, else `parent`. node_range
+ * before); its parent's is `above` when that is itself pending, else `parent`. ism_build_node_range
  * writes th->tapes[level] as it would have when the node was reached: the levels below a
  * pending node are written only inside its subtree, so a resolved tape stays valid for
  * the rest of it. */
@@ -767,7 +685,7 @@ static const ism_tape *resolve_tape(build *b, thread_state *th, tape_link *l)
     if (!l->tape) {
         ism_interval range;
         const ism_tape *parent = l->above ? resolve_tape(b, th, l->above) : l->parent;
-        l->tape = node_range(b, th, &l->nd, parent, &range);
+        l->tape = ism_build_node_range(b, th, &l->nd, parent, &range);
     }
     return l->tape;
 }
@@ -777,8 +695,8 @@ static const ism_tape *resolve_tape(build *b, thread_state *th, tape_link *l)
  * for: true when it is a leaf. Its corners: known (node_corners' values, prefetched), or
  * NULL to read them here. Its flags and verdict go to *out, the level its children may be
  * split down to to *limit_io. */
-static bool test_node(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
-                      const ism_corners *known, ism_node *out, int *limit_io)
+bool ism_build_test_node(build *b, thread_state *th, const ism_node *nd, const ism_tape *sub,
+                         const ism_corners *known, ism_node *out, int *limit_io)
 {
     int limit = *limit_io;
     bool leaf;
@@ -850,12 +768,12 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     if (atomic_load(&b->failed) != ISM_BUILD_OK)
         return false;
     if (b->p->cancel && *b->p->cancel)
-        return fail(b, ISM_BUILD_CANCELLED);
+        return ism_build_fail(b, ISM_BUILD_CANCELLED);
     ism_node nd = v->v[i];
     if (defer && nd.level == defer->level) {
         deferral *d = realloc(defer->v, (defer->n + 1) * sizeof *d);
         if (!d)
-            return fail(b, ISM_BUILD_NO_MEMORY);
+            return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
         d[defer->n++] = (deferral){i, limit, pi};
         defer->v = d;
         return true;
@@ -867,7 +785,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
         return copy_subtree(b, th, v, i, pi);
     /* asked only where it decides: a node the last round left empty stays empty and one it
      * split is split again, forced or not (take_over) */
-    bool forced = (!pv || pv->state == ISM_NODE_LEAF) && forced_split(b, &nd);
+    bool forced = (!pv || pv->state == ISM_NODE_LEAF) && ism_build_forced_split(b, &nd);
     if (pv && take_over(b, th, v, i, pi, forced))
         return true;
     bool was_split = pv && pv->state == ISM_NODE_SPLIT;
@@ -876,7 +794,8 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
     if (!was_split && above)
         tape = resolve_tape(b, th, above);
     ism_interval range = known ? *known : (ism_interval){0, 0};
-    const ism_tape *sub = known || was_split ? tape : node_range(b, th, &nd, tape, &range);
+    const ism_tape *sub =
+        known || was_split ? tape : ism_build_node_range(b, th, &nd, tape, &range);
     if (!pv && !(range.lo <= 0 && range.hi >= 0)) {
         v->v[i].state = ISM_NODE_EMPTY;
         th->excluded++;
@@ -892,7 +811,7 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
             limit = resolve_limit(b, limit); /* as below */
     }
     if (!pv && nd.level >= b->p->min_depth && !forced)
-        leaf = test_node(b, th, &nd, sub, NULL, &v->v[i], &limit);
+        leaf = ism_build_test_node(b, th, &nd, sub, NULL, &v->v[i], &limit);
     if (leaf) {
         v->v[i].state = ISM_NODE_LEAF;
         /* the tape its cell evaluates: sub, shortened over this box or an ancestor's */
@@ -900,14 +819,14 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
             v->tape[i] = tape_number(b, th, sub, nd.level);
         return true;
     }
-    if ((th->new_nodes += 8) >= NODE_BATCH && !count_nodes(b, th))
+    if ((th->new_nodes += 8) >= NODE_BATCH && !ism_build_count_nodes(b, th))
         return false;
     size_t first = v->n;
-    if (!vec_reserve(b, v, 8))
-        return fail(b, ISM_BUILD_NO_MEMORY);
+    if (!ism_build_vec_reserve(b, v, 8))
+        return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
     for (int k = 0; k < 8; k++) {
-        ism_node c = child_node(b, &nd, k);
-        vec_put(v, &c, 0);
+        ism_node c = ism_build_child(b, &nd, k);
+        ism_build_vec_put(v, &c, 0);
     }
     v->v[i].state = ISM_NODE_SPLIT;
     v->v[i].child = (int32_t)first;
@@ -917,157 +836,12 @@ static bool grow(build *b, thread_state *th, node_vec *v, size_t i, const ism_ta
                  !(b->shortening && ism_tape_has_min_max(sub));
     ism_interval ranges[8];
     if (batch)
-        children_ranges(b, th, &nd, sub, ranges);
+        ism_build_children_ranges(b, th, &nd, sub, ranges);
     for (int k = 0; k < 8; k++)
         if (!grow(b, th, v, first + k, was_split ? NULL : sub, was_split ? &link : NULL, limit,
                   defer, was_split ? pv->child + k : -1, batch ? &ranges[k] : NULL))
             return false;
     return true;
-}
-
-/* A task's subtree grown level by level (grow_levels): where each node's decision depends
- * on nothing but the node, its range and its limit — a build that shortens no tape (every
- * node evaluates f itself) and takes nothing over from a last round — the nodes of one level
- * are decided together, so the pure values their tests read (corners, edge roots) are
- * computed ahead in wide batches (level_prefetch.h), then laid out in grow's depth-first
- * order (lay_out): the tree, every node's verdict and the counters but the evaluation counts
- * are grow's (the memos end holding other entries, of the same pure values). Klein bottle at
- * E 3.27e-3 (callgrind, one thread, ism_mesh_surface; main 5757910): 3,486.0M -> 3,447.0M,
- * the roots' f 31 points a batch (was 1), the corners' 40 (was 1 to 27); the 87,166 tests
- * themselves unchanged. Not yet for tapes that shorten (each node of a level would need its
- * own shortened tape: gyroid-ball, Barth's sextic) nor for later rounds (take_over). */
-typedef struct level_node {
-    ism_node nd;        /* decided; a split node's child: its first child in the next level */
-    int limit;          /* the level its children may be split down to */
-    ism_interval range; /* f's interval over the node */
-    bool tested;        /* asks the flatness test */
-} level_node;
-
-typedef struct level_vec {
-    level_node *v;
-    size_t n, cap;
-} level_vec;
-
-/* Nodes of a level decided together: their corners and roots fit the memos (2^16 corner
- * and 2^13 root entries a thread) with room to spare, and the batches are hundreds wide.
- * Klein bottle at E 3.27e-3 (292a171's trial, callgrind, one thread, ism_mesh_surface): a
- * chunk of 64 gave 3,458.3M instructions, 512 gave 3,456.4M; 128 kept (the chunk size moves
- * the total by under 0.1%). */
-#define LEVEL_CHUNK 128
-
-/* Does grow_levels decide as grow would (see level_node)? */
-static bool levels_apply(const build *b, const thread_state *th)
-{
-    return !b->shortening && !b->previous && !b->p->scalar_eval && th->memo.roots;
-}
-
-/* Nodes [from, to) of level lv: ranges and force checks, the tested nodes' corners (into
- * corners: room for LEVEL_CHUNK) and roots prefetched, then each decided as grow decides it
- * (its children appended to next). */
-static bool decide_chunk(build *b, thread_state *th, level_vec *lv, size_t from, size_t to,
-                         level_vec *next, ism_corners *corners)
-{
-    const ism_node *tested[LEVEL_CHUNK];
-    bool have[LEVEL_CHUNK];
-    size_t nt = 0;
-    for (size_t j = from; j < to; j++) {
-        level_node *ln = &lv->v[j];
-        th->visited++;
-        bool forced = forced_split(b, &ln->nd);
-        if (!(ln->range.lo <= 0 && ln->range.hi >= 0)) {
-            ln->nd.state = ISM_NODE_EMPTY;
-            th->excluded++;
-            continue;
-        }
-        ln->tested = ln->nd.level >= b->p->min_depth && !forced;
-        if (ln->tested)
-            tested[nt++] = &ln->nd;
-    }
-    const ism_tape *saved = th->s.tape;
-    th->s.tape = b->p->tape; /* the tape the nodes are tested on (levels_apply: f's own) */
-    ism_prefetch_nodes(&th->memo, th->corners, ISM_CORNER_MEMO_BITS, b->grid, tested, nt,
-                       &th->s, corners, have);
-    th->s.tape = saved;
-    for (size_t j = from, t = 0; j < to; j++) {
-        if (atomic_load(&b->failed) != ISM_BUILD_OK)
-            return false;
-        if (b->p->cancel && *b->p->cancel)
-            return fail(b, ISM_BUILD_CANCELLED);
-        level_node *ln = &lv->v[j];
-        if (ln->nd.state == ISM_NODE_EMPTY)
-            continue;
-        ism_node nd = ln->nd;
-        const ism_corners *known = ln->tested && have[t] ? &corners[t] : NULL;
-        t += ln->tested;
-        if (ln->tested && test_node(b, th, &nd, b->p->tape, known, &ln->nd, &ln->limit))
-            continue; /* a leaf (state LEAF already: no tape number, f itself) */
-        if ((th->new_nodes += 8) >= NODE_BATCH && !count_nodes(b, th))
-            return false;
-        if (!ism_grow((void **)&next->v, &next->cap, next->n + 8, sizeof *next->v, 256))
-            return fail(b, ISM_BUILD_NO_MEMORY);
-        ism_interval ranges[8];
-        children_ranges(b, th, &nd, b->p->tape, ranges);
-        ln->nd.state = ISM_NODE_SPLIT;
-        ln->nd.child = (int32_t)next->n;
-        for (int k = 0; k < 8; k++)
-            next->v[next->n++] =
-                (level_node){child_node(b, &nd, k), ln->limit, ranges[k], false};
-    }
-    return true;
-}
-
-/* Node j of level l laid out at v->v[i], its children appended and laid out in turn, as
- * grow appends and grows them. */
-static bool lay_out(build *b, node_vec *v, size_t i, const level_vec *lv, int l, size_t j)
-{
-    const ism_node *nd = &lv[l].v[j].nd;
-    v->v[i] = *nd;
-    if (nd->state != ISM_NODE_SPLIT)
-        return true;
-    size_t first = v->n;
-    if (!vec_reserve(b, v, 8))
-        return fail(b, ISM_BUILD_NO_MEMORY);
-    for (int k = 0; k < 8; k++)
-        vec_put(v, &lv[l + 1].v[nd->child + k].nd, 0);
-    v->v[i].child = (int32_t)first;
-    for (int k = 0; k < 8; k++)
-        if (!lay_out(b, v, first + k, lv, l + 1, (size_t)nd->child + k))
-            return false;
-    return true;
-}
-
-/* The task's node v->v[0] and its subtree, decided level by level (levels_apply). */
-static bool grow_levels(build *b, thread_state *th, node_vec *v, int limit)
-{
-    level_vec lv[ISM_GRID_MAX_DEPTH + 2];
-    memset(lv, 0, sizeof lv);
-    int top = v->v[0].level, l = top;
-    bool ok = true;
-    ism_interval range;
-    node_range(b, th, &v->v[0], b->p->tape, &range);
-    lv[top].v = malloc(sizeof *lv[top].v);
-    ism_corners *k = malloc(LEVEL_CHUNK * sizeof *k); /* the chunk's tested nodes' */
-    if (!lv[top].v || !k) {
-        free(lv[top].v);
-        free(k);
-        return fail(b, ISM_BUILD_NO_MEMORY);
-    }
-    lv[top].v[0] = (level_node){v->v[0], limit, range, false};
-    lv[top].n = lv[top].cap = 1;
-    for (; ok && l <= ISM_GRID_MAX_DEPTH && lv[l].n; l++)
-        for (size_t from = 0; ok && from < lv[l].n; from += LEVEL_CHUNK) {
-            size_t to = lv[l].n - from < LEVEL_CHUNK ? lv[l].n : from + LEVEL_CHUNK;
-            ok = decide_chunk(b, th, &lv[l], from, to, &lv[l + 1], k);
-        }
-    /* No node past the finest lattice level is split: every split path stops at limit or
-     * thin_depth, both at most ISM_GRID_MAX_DEPTH. A child appended there would be laid out
-     * as an untested leaf, so say so loudly rather than mesh it. */
-    assert(!ok || lv[ISM_GRID_MAX_DEPTH + 1].n == 0);
-    ok = ok && lay_out(b, v, 0, lv, top, 0);
-    for (int j = top; j <= ISM_GRID_MAX_DEPTH + 1; j++)
-        free(lv[j].v);
-    free(k);
-    return ok;
 }
 
 static void report_progress(build *b)
@@ -1086,12 +860,12 @@ static void run_task(void *ctx, size_t task, int thread)
     thread_state *th = &b->threads[thread];
     node_vec *out = &b->task_out[task];
     /* The task's tape: shorten from the full tape over the task's own box on the way. */
-    bool ok = levels_apply(b, th)
-                  ? grow_levels(b, th, out, b->tasks[task].limit)
+    bool ok = ism_levels_apply(b, th)
+                  ? ism_grow_levels(b, th, out, b->tasks[task].limit)
                   : grow(b, th, out, 0, b->p->tape, NULL, b->tasks[task].limit, NULL,
                          b->tasks[task].previous, NULL);
     if (ok)
-        count_nodes(b, th);
+        ism_build_count_nodes(b, th);
     report_progress(b);
 }
 
@@ -1233,7 +1007,7 @@ static bool join_tasks(build *b, node_vec *top, int nthreads)
         at[k] = n;
         n += b->task_out[k].n - 1;
     }
-    if (!vec_reserve(b, top, n - top->n)) {
+    if (!ism_build_vec_reserve(b, top, n - top->n)) {
         free(at);
         return false;
     }
@@ -1297,7 +1071,7 @@ enum ism_build_status ism_octree_build(ism_octree *t, const ism_octree_build_par
     if (grow(&b, &b.threads[0], &top, 0, p->tape, NULL, p->max_depth, &deferred,
              b.previous ? 0 : -1,
              NULL))
-        count_nodes(&b, &b.threads[0]);
+        ism_build_count_nodes(&b, &b.threads[0]);
     if ((status = atomic_load(&b.failed)) != ISM_BUILD_OK)
         goto done;
 
