@@ -1,0 +1,126 @@
+/* test_level_prefetch.c — the octree build's level prefetch (level_prefetch.h) and the flatness
+ * test's error measure (cell_error.h) keep one root memo by one rule (root_table.h's claim and
+ * store, corners.h's single-root edges): on every node of a level of the unit sphere, the ring
+ * torus and Barth's sextic, in three placements, the roots the prefetch searches in lanes and
+ * logs are, edge for edge and bit for bit, the ones ism_cell_error searches one at a time on
+ * the same corners with a memo of its own, and neither logs an edge the other does not. */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+#include "core/eval/eval.h"
+#include "core/octree/cell_error.h"
+#include "core/octree/level_prefetch.h"
+#include "core/octree/root_table.h"
+#include "poly_fixture.h"
+
+#define DEPTH 6   /* the lattice: 64 steps an axis */
+#define LEVEL 4   /* the nodes tested: 16^3, 4 steps across */
+#define CHUNK 128 /* nodes a prefetch call, as the build's chunk */
+#define HALF 1.6  /* the box: ±1.6 (Barth's ball r 1.5 inside) */
+
+static int by_edge(const void *x, const void *y)
+{
+    const ism_root_entry *a = x, *b = y;
+    return a->a != b->a ? (a->a < b->a ? -1 : 1) : a->b != b->b ? (a->b < b->b ? -1 : 1) : 0;
+}
+
+/* The log's roots sorted by edge, one per edge (a later search of an edge whose memo slot
+ * was taken over in between logs the same root again: both sides must agree on that). */
+static size_t distinct(ism_root_log *l)
+{
+    qsort(l->v, l->n, sizeof *l->v, by_edge);
+    size_t m = 0;
+    for (size_t i = 0; i < l->n; i++) {
+        if (m && by_edge(&l->v[m - 1], &l->v[i]) == 0) {
+            cr_expect(memcmp(&l->v[m - 1].t, &l->v[i].t, sizeof(double)) == 0,
+                      "an edge logged twice with two roots");
+            continue;
+        }
+        l->v[m++] = l->v[i];
+    }
+    return m;
+}
+
+static size_t compare(const pf_surface *surf, int placement)
+{
+    ism_tape *t = pf_compile(surf);
+    ism_sampler s;
+    memset(&s, 0, sizeof s);
+    s.tape = t;
+    s.ws = ism_eval_ws_new(t);
+    s.batch = true; /* the build's samplers */
+    cr_assert(s.ws);
+    const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
+    double box[6];
+    pf_sweep_box(base, DEPTH, placement, box);
+    ism_grid g = {DEPTH, {0, 0, 0}, {0, 0, 0}};
+    for (int a = 0; a < 3; a++) {
+        g.lo[a] = box[a];
+        g.step[a] = (box[a + 3] - box[a]) / (1 << DEPTH);
+    }
+    const size_t nroots = (size_t)1 << ISM_ROOT_MEMO_BITS;
+    ism_point_entry *points = calloc((size_t)1 << ISM_CORNER_MEMO_BITS, sizeof *points);
+    ism_root_entry *lanes_memo = calloc(nroots, sizeof *lanes_memo);
+    ism_root_entry *one_memo = calloc(nroots, sizeof *one_memo);
+    cr_assert(points && lanes_memo && one_memo);
+    ism_root_log lanes_log = {NULL, 0, 0, (size_t)1 << 24}, one_log = lanes_log;
+    ism_node_memo lanes = {lanes_memo, NULL, NULL, &lanes_log};
+    ism_node_memo one = {one_memo, NULL, NULL, &one_log};
+    const int side = 1 << LEVEL, step = 1 << (DEPTH - LEVEL);
+    ism_node nodes[CHUNK];
+    const ism_node *at[CHUNK];
+    ism_corners k[CHUNK];
+    bool have[CHUNK];
+    size_t n = 0, measured = 0;
+    for (int i = 0; i < side * side * side; i++) {
+        ism_node nd = {{(i % side) * step, (i / side % side) * step, (i / side / side) * step},
+                       -1, LEVEL, ISM_NODE_LEAF, 0, 0};
+        nodes[n] = nd;
+        at[n] = &nodes[n];
+        if (++n < CHUNK && i + 1 < side * side * side)
+            continue;
+        ism_prefetch_nodes(&lanes, points, ISM_CORNER_MEMO_BITS, &g, at, n, &s, k, have);
+        for (size_t j = 0; j < n; j++) {
+            bool finite = have[j];
+            for (int c = 0; c < 8 && finite; c++)
+                finite = isfinite(k[j].f[c]);
+            if (!finite || !ism_single_root_edges(k[j].f))
+                continue;
+            ism_corners own = k[j];
+            own.memo = &one;
+            double err;
+            ism_cell_error(&s, &own, 1e-3, 0, NULL, &err); /* its edge roots, one at a time */
+            measured++;
+        }
+        n = 0;
+    }
+    size_t na = distinct(&lanes_log), nb = distinct(&one_log);
+    cr_expect_eq(na, nb, "%s: %zu edges searched in lanes, %zu one at a time", surf->expr, na,
+                 nb);
+    for (size_t i = 0; i < na && i < nb; i++) {
+        cr_expect(lanes_log.v[i].a == one_log.v[i].a && lanes_log.v[i].b == one_log.v[i].b,
+                  "%s: edge %zu differs", surf->expr, i);
+        cr_expect(memcmp(&lanes_log.v[i].t, &one_log.v[i].t, sizeof(double)) == 0,
+                  "%s: edge %zu: root %.17g in lanes, %.17g alone", surf->expr, i,
+                  lanes_log.v[i].t, one_log.v[i].t);
+    }
+    cr_expect_gt(measured, 50, "%s: %zu nodes crossed", surf->expr, measured);
+    ism_root_log_free(&lanes_log);
+    ism_root_log_free(&one_log);
+    free(points);
+    free(lanes_memo);
+    free(one_memo);
+    ism_eval_ws_free(s.ws);
+    ism_tape_free(t);
+    return na;
+}
+
+Test(level_prefetch, lanes_and_the_error_measure_keep_the_same_roots)
+{
+    const pf_surface *surfs[] = {&pf_unit_sphere, &pf_ring_torus, &pf_barth_sextic};
+    for (int sf = 0; sf < 3; sf++)
+        for (int p = -1; p < 2; p++) /* own box, +1e-3, irrational (pf_sweep_box) */
+            cr_expect_gt(compare(surfs[sf], p), 100, "%s placement %d: few roots",
+                         surfs[sf]->expr, p);
+}
