@@ -2,6 +2,7 @@
  * (arithmetic in interval_ops.h). Optionally records, for every min/max, which operand the
  * box proves to be the result everywhere; tape shortening reads those choices. */
 #include "core/eval/interval_eval.h"
+#include "core/eval/avx2_clone.h"
 #include "core/eval/interval_ops.h"
 #include "core/eval/threaded.h"
 #include "core/eval/workspace.h"
@@ -87,10 +88,21 @@ static ism_interval sane_input(ism_interval v)
 /* The tape by direct threading (GNU C's labels as values, as eval_double.c's run_threaded):
  * each operation's code ends in its own test for the end and its own jump to the next
  * instruction's, where a switch in a loop paid a bound test, a table offset and the loop's
- * test on every step. An operation code past the list gives the whole line. */
-ism_interval ism_interval_run(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
-                              ism_interval y, ism_interval z, uint8_t *choices)
-{
+ * test on every step. An operation code past the list gives the whole line. Compiled twice
+ * (avx2_clone.h's ISM_AVX2_TWICE: the same operations, VEX forms in the AVX2 copy). */
+#define A r[in->a]
+#define B r[in->b]
+#define C in->imm
+#define CC ((ism_interval){ in->imm, in->imm })
+#define CH (*(choices ? &choices[in - t->code] : &scratch))
+#define STEP(OP, E)                                                                         \
+    L_##OP:                                                                                 \
+    r[in->out] = ism_iv_sane(E);                                                            \
+    ISM_THREADED_NEXT(next_op, in, end, return r[t->result])
+ISM_AVX2_TWICE(ism_interval, run,
+               (const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
+                ism_interval z, uint8_t *choices),
+               (t, ws, x, y, z, choices),
     ISM_THREADED_TABLE(next_op, INTERVAL_OPS);
     ism_interval *r = ws->iv;
     ism_trig_cache *trig = ws->trig;
@@ -102,23 +114,19 @@ ism_interval ism_interval_run(const ism_tape *t, ism_eval_ws *ws, ism_interval x
     if (in == end)
         return r[t->result];
     goto *next_op[in->op];
-#define A r[in->a]
-#define B r[in->b]
-#define C in->imm
-#define CC ((ism_interval){ in->imm, in->imm })
-#define CH (*(choices ? &choices[in - t->code] : &scratch))
-#define STEP(OP, E)                                                                         \
-    L_##OP:                                                                                 \
-    r[in->out] = ism_iv_sane(E);                                                            \
-    ISM_THREADED_NEXT(next_op, in, end, return r[t->result])
     INTERVAL_OPS(STEP)
-    STEP(BAD, ism_iv_whole())
+    STEP(BAD, ism_iv_whole()))
 #undef STEP
 #undef A
 #undef B
 #undef C
 #undef CC
 #undef CH
+
+ism_interval ism_interval_run(const ism_tape *t, ism_eval_ws *ws, ism_interval x,
+                              ism_interval y, ism_interval z, uint8_t *choices)
+{
+    return run(t, ws, x, y, z, choices);
 }
 
 ism_interval ism_eval_interval(const ism_tape *t, ism_eval_ws *ws, ism_interval x,

@@ -37,8 +37,20 @@ INLINE v4d vup1(v4d x)
 {
     return (x + splat(ISM_ROUND1_ABS)) + vabs(x) * splat(ISM_ROUND1_REL);
 }
-INLINE v4d vmin(v4d a, v4d b) { return v4_pick(a < b, a, b); }
-INLINE v4d vmax(v4d a, v4d b) { return v4_pick(a > b, a, b); }
+INLINE v4d vmin(v4d a, v4d b)
+{
+    v4d r;
+    for (int j = 0; j < 4; j++)
+        r[j] = a[j] < b[j] ? a[j] : b[j];
+    return r;
+}
+INLINE v4d vmax(v4d a, v4d b)
+{
+    v4d r;
+    for (int j = 0; j < 4; j++)
+        r[j] = a[j] > b[j] ? a[j] : b[j];
+    return r;
+}
 INLINE v4d vnan_to(v4d x, double c) { return v4_pick(x == x, x, splat(c)); }
 
 INLINE vi v_splat(ism_interval u) { return (vi){splat(u.lo), splat(u.hi)}; }

@@ -48,13 +48,6 @@ static inline ism_interval ism_iv_whole(void) { return iv(-INFINITY, INFINITY); 
 
 static inline double nan_to(double v, double instead) { return v == v ? v : instead; }
 
-/* Replaces NaN bounds by the infinity on their side (every operation keeps lo <= hi
- * otherwise). */
-static inline ism_interval ism_iv_sane(ism_interval r)
-{
-    return iv(nan_to(r.lo, -INFINITY), nan_to(r.hi, INFINITY));
-}
-
 #if defined(__SSE2__)
 /* An interval as one SSE2 vector [lo, hi] and back. */
 static inline __m128d iv_vec(ism_interval a) { return _mm_set_pd(a.hi, a.lo); }
@@ -83,6 +76,20 @@ static inline __m128d round1_out(__m128d v)
     return _mm_add_pd(_mm_add_pd(v, step), _mm_mul_pd(mag, rel));
 }
 #endif
+
+/* Replaces NaN bounds by the infinity on their side (every operation keeps lo <= hi
+ * otherwise). With SSE2 one unordered compare of both bounds and one branch, rarely taken,
+ * where the two nan_to tests cost ~9 instructions on each step of the interval pass (~20% of
+ * a pass on Barth's tape); the same bits either way. */
+static inline ism_interval ism_iv_sane(ism_interval r)
+{
+#if defined(__SSE2__)
+    __m128d v = iv_vec(r);
+    if (__builtin_expect(_mm_movemask_pd(_mm_cmpunord_pd(v, v)) == 0, 1))
+        return r;
+#endif
+    return iv(nan_to(r.lo, -INFINITY), nan_to(r.hi, INFINITY));
+}
 
 static inline ism_interval iv_add(ism_interval a, ism_interval b)
 {

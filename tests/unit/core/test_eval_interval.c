@@ -138,7 +138,9 @@ static int same_bits(double a, double b)
 /* The SSE2 forms of the common operations (the only ones compiled on x86-64) against
  * down1 / up1 of the scalar expressions, written out here: the same bits for every input,
  * a NaN as a NaN; special values (signed zeros, infinities, NaN, subnormals, DBL_MAX) in
- * every pair, then random bit patterns. Swapping round1_out's lanes fails it. */
+ * every pair, then random bit patterns. Swapping round1_out's lanes fails it. ism_iv_sane's
+ * one-test form against the two NaN tests written out (no NaN left, each the side's
+ * infinity). */
 Test(eval_interval, sse2_lanes_are_the_scalar_bounds)
 {
     const double sp[] = { 0.0, -0.0, INFINITY, -INFINITY, NAN, -NAN, 0x1p-1074, -0x1p-1074,
@@ -172,6 +174,8 @@ Test(eval_interval, sse2_lanes_are_the_scalar_bounds)
         double l2 = a.lo * a.lo, h2 = a.hi * a.hi;
         double lo2 = a.lo >= 0.0 ? l2 : a.hi <= 0.0 ? h2 : 0.0;
         LANES_SAME("iv_square", iv_square(a), ism_max(down1(lo2), 0.0), up1(ism_max(l2, h2)));
+        LANES_SAME("ism_iv_sane", ism_iv_sane(a), a.lo == a.lo ? a.lo : -INFINITY,
+                   a.hi == a.hi ? a.hi : INFINITY);
     }
 }
 
