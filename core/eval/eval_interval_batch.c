@@ -23,6 +23,7 @@
  * a*(-b)). */
 #include "core/eval/avx2_clone.h"
 #include "core/eval/interval_ops.h"
+#include "core/eval/threaded.h"
 #include "core/eval/workspace.h"
 
 #include <fenv.h>
@@ -99,7 +100,7 @@ static ALWAYS_INLINE double sane(double v)
     }
 
 /* a + b = [al + bl, ah + bh]; a - b = [al - bh, ah - bl] = [al + bnh, -(anh + bl)]. With
- * every operand below +inf (and c finite: chunk_op checks) no sum is NaN, and rounding down
+ * every operand below +inf (and c finite: BATCH_STEP_AS checks) no sum is NaN, and rounding down
  * turns an overflow to +inf into DBL_MAX, so the results stay below +inf. */
 KERNEL_RR(k_add, ol[j] = al[j] + bl[j]; onh[j] = anh[j] + bnh[j];)
 KERNEL_RR(k_sub, ol[j] = al[j] + bnh[j]; onh[j] = anh[j] + bl[j];)
@@ -205,50 +206,67 @@ static ALWAYS_INLINE void sanitize(double *restrict ol, double *restrict onh, si
     }
 }
 
-/* One instruction over the first m lanes (a multiple of LANES) of every register. */
-static ALWAYS_INLINE void chunk_op(const ism_instr *in, double *lo, double *nh, size_t m,
-                                   rounding mode)
-{
-    double *ol = lo + (size_t)in->out * ISM_IV_CHUNK, *onh = nh + (size_t)in->out * ISM_IV_CHUNK;
-    const double *al = lo + (size_t)in->a * ISM_IV_CHUNK, *anh = nh + (size_t)in->a * ISM_IV_CHUNK;
-    size_t b = (size_t)(ism_op_has_reg_b(in->op) ? in->b : in->a) * ISM_IV_CHUNK;
-    const double *bl = lo + b, *bnh = nh + b;
-    const double c = in->imm;
-    switch (in->op) {
-    case ISM_OP_CONST:
-        for (size_t j = 0; j < m; j++) {
-            ol[j] = sane(c);
-            onh[j] = sane(-c);
-        }
-        break;
-    case ISM_OP_COPY: k_copy(ol, onh, al, anh, c, m); break;
-    case ISM_OP_ADD_RR: k_add(ol, onh, al, anh, bl, bnh, m); break;
-    case ISM_OP_ADD_RC: k_add_c(ol, onh, al, anh, c, m); break;
-    case ISM_OP_SUB_RR: k_sub(ol, onh, al, anh, bl, bnh, m); break;
-    case ISM_OP_SUB_CR: k_c_sub(ol, onh, al, anh, c, m); break;
-    case ISM_OP_MUL_RR:
-        if (k_mul_finite(ol, onh, al, anh, bl, bnh, m))
-            k_mul(ol, onh, al, anh, bl, bnh, m);
-        break;
-    case ISM_OP_MUL_RC:
-        if (c > 0.0)
-            k_mul_cpos(ol, onh, al, anh, c, m);
-        else if (c < 0.0)
-            k_mul_cneg(ol, onh, al, anh, c, m);
-        else
-            run_nearest(in, ol, onh, al, anh, bl, bnh, m, mode);
-        break;
-    case ISM_OP_MIN_RR: k_min(ol, onh, al, anh, bl, bnh, m); break;
-    case ISM_OP_MIN_RC: k_min_c(ol, onh, al, anh, c, m); break;
-    case ISM_OP_MAX_RR: k_max(ol, onh, al, anh, bl, bnh, m); break;
-    case ISM_OP_MAX_RC: k_max_c(ol, onh, al, anh, c, m); break;
-    case ISM_OP_NEG: k_neg(ol, onh, al, anh, c, m); break;
-    case ISM_OP_SQUARE: k_square(ol, onh, al, anh, c, m); break;
-    default: run_nearest(in, ol, onh, al, anh, bl, bnh, m, mode); break;
-    }
-    if (!isfinite(c) && !ism_op_has_reg_b(in->op))
-        sanitize(ol, onh, m);
-}
+/* Every operation's step over the first m lanes (a multiple of LANES) of every register, as
+ * a statement in ol, onh (its register's bounds), al, anh, bl, bnh (its operands'; b is a
+ * when the operation reads no second register), c (its constant), in, m and mode: one list,
+ * expanded by CHUNKS_BODY's labels. */
+#define BATCH_OPS(X)                                                                        \
+    X(ISM_OP_CONST, for (size_t j = 0; j < m; j++) {                                        \
+        ol[j] = sane(c);                                                                    \
+        onh[j] = sane(-c);                                                                  \
+    })                                                                                      \
+    X(ISM_OP_COPY, k_copy(ol, onh, al, anh, c, m))                                          \
+    X(ISM_OP_ADD_RR, k_add(ol, onh, al, anh, bl, bnh, m))                                   \
+    X(ISM_OP_ADD_RC, k_add_c(ol, onh, al, anh, c, m))                                       \
+    X(ISM_OP_SUB_RR, k_sub(ol, onh, al, anh, bl, bnh, m))                                   \
+    X(ISM_OP_SUB_CR, k_c_sub(ol, onh, al, anh, c, m))                                       \
+    X(ISM_OP_MUL_RR, if (k_mul_finite(ol, onh, al, anh, bl, bnh, m))                        \
+                         k_mul(ol, onh, al, anh, bl, bnh, m))                               \
+    X(ISM_OP_MUL_RC, if (c > 0.0) k_mul_cpos(ol, onh, al, anh, c, m);                       \
+                     else if (c < 0.0) k_mul_cneg(ol, onh, al, anh, c, m);                  \
+                     else NEAREST)                                                          \
+    X(ISM_OP_DIV_RR, NEAREST)                                                               \
+    X(ISM_OP_DIV_RC, NEAREST)                                                               \
+    X(ISM_OP_DIV_CR, NEAREST)                                                               \
+    X(ISM_OP_MIN_RR, k_min(ol, onh, al, anh, bl, bnh, m))                                   \
+    X(ISM_OP_MIN_RC, k_min_c(ol, onh, al, anh, c, m))                                       \
+    X(ISM_OP_MAX_RR, k_max(ol, onh, al, anh, bl, bnh, m))                                   \
+    X(ISM_OP_MAX_RC, k_max_c(ol, onh, al, anh, c, m))                                       \
+    X(ISM_OP_NEG, k_neg(ol, onh, al, anh, c, m))                                            \
+    X(ISM_OP_SQUARE, k_square(ol, onh, al, anh, c, m))                                      \
+    X(ISM_OP_POWI, NEAREST)                                                                 \
+    X(ISM_OP_POWC, NEAREST)                                                                 \
+    X(ISM_OP_SQRT, NEAREST)                                                                 \
+    X(ISM_OP_SIN, NEAREST)                                                                  \
+    X(ISM_OP_COS, NEAREST)                                                                  \
+    X(ISM_OP_TAN, NEAREST)                                                                  \
+    X(ISM_OP_EXP, NEAREST)                                                                  \
+    X(ISM_OP_LOG, NEAREST)                                                                  \
+    X(ISM_OP_ABS, NEAREST)
+ISM_THREADED_COMPLETE(BATCH_OPS, "BATCH_OPS names every operation (the label table)");
+
+/* Box by box in round-to-nearest (nearest_op; the whole line past the list). */
+#define NEAREST run_nearest(in, ol, onh, al, anh, bl, bnh, m, mode)
+
+/* One operation's labelled step: its registers, its code, then, for an operation reading
+ * no second register whose constant is not finite, the register invariant back (sanitize).
+ * HAS_B is a constant for each listed operation, so the test folds away for the others. */
+#define BATCH_STEP_AS(LABEL, HAS_B, E)                                                      \
+    LABEL : {                                                                               \
+        double *ol = lo + (size_t)in->out * ISM_IV_CHUNK;                                   \
+        double *onh = nh + (size_t)in->out * ISM_IV_CHUNK;                                  \
+        const double *al = lo + (size_t)in->a * ISM_IV_CHUNK;                               \
+        const double *anh = nh + (size_t)in->a * ISM_IV_CHUNK;                              \
+        size_t b_ = (size_t)((HAS_B) ? in->b : in->a) * ISM_IV_CHUNK;                       \
+        const double *bl = lo + b_, *bnh = nh + b_;                                         \
+        const double c = in->imm;                                                           \
+        (void)al, (void)anh, (void)bl, (void)bnh, (void)c;                                  \
+        E;                                                                                  \
+        if (!(HAS_B) && !isfinite(c))                                                       \
+            sanitize(ol, onh, m);                                                           \
+    }                                                                                       \
+    ISM_THREADED_NEXT(next_op, in, end, goto tape_done)
+#define BATCH_STEP(OP, E) BATCH_STEP_AS(L_##OP, ism_op_has_reg_b(OP), E)
 
 /* ---- packing ---- */
 
@@ -321,30 +339,38 @@ static ALWAYS_INLINE void unpack(const double *restrict lo, const double *restri
     }
 }
 
-/* n <= ISM_IV_CHUNK boxes through the whole tape. */
-static ALWAYS_INLINE void chunk(const ism_tape *t, double *lo, double *nh,
-                                const ism_interval *x, const ism_interval *y,
-                                const ism_interval *z, ism_interval *out, size_t n,
-                                rounding mode)
+/* The boxes n <= ISM_IV_CHUNK into the input registers, m lanes (n rounded up to LANES). */
+static ALWAYS_INLINE void chunk_in(double *lo, double *nh, const ism_interval *x,
+                                   const ism_interval *y, const ism_interval *z, size_t n,
+                                   size_t m)
 {
-    size_t m = (n + LANES - 1) / LANES * LANES;
     pack(x, lo + ISM_REG_X * ISM_IV_CHUNK, nh + ISM_REG_X * ISM_IV_CHUNK, n, m);
     pack(y, lo + ISM_REG_Y * ISM_IV_CHUNK, nh + ISM_REG_Y * ISM_IV_CHUNK, n, m);
     pack(z, lo + ISM_REG_Z * ISM_IV_CHUNK, nh + ISM_REG_Z * ISM_IV_CHUNK, n, m);
-    for (size_t i = 0; i < t->len; i++)
-        chunk_op(&t->code[i], lo, nh, m, mode);
-    size_t r = (size_t)t->result * ISM_IV_CHUNK;
-    unpack(lo + r, nh + r, out, n);
 }
 
-/* Every chunk in round-down mode (the caller's mode restored after), compiled for AVX2
- * and for the x86-64 baseline, chosen at run time (see eval_double.c). */
+/* Every chunk in round-down mode (the caller's mode restored after), each through the whole
+ * tape by direct threading (threaded.h: each step's code ends in its own end test and jump,
+ * where a switch in a loop paid a bound test, the switch's table, the loop's test and every
+ * step the constant's test); compiled for AVX2 and for the x86-64 baseline, chosen at run
+ * time (see eval_double.c). A macro: each expansion needs its own labels. */
 #define CHUNKS_BODY                                                                     \
+    ISM_THREADED_TABLE(next_op, BATCH_OPS);                                             \
     rounding mode = rounding_get();                                                     \
     rounding_set(rounding_down(mode));                                                  \
     for (size_t done = 0; done < n; done += ISM_IV_CHUNK) {                             \
         size_t k = n - done < ISM_IV_CHUNK ? n - done : ISM_IV_CHUNK;                   \
-        chunk(t, lo, nh, x + done, y + done, z + done, out + done, k, mode);            \
+        size_t m = (k + LANES - 1) / LANES * LANES;                                     \
+        chunk_in(lo, nh, x + done, y + done, z + done, k, m);                           \
+        const ism_instr *in = t->code, *const end = t->code + t->len;                   \
+        if (in == end)                                                                  \
+            goto tape_done;                                                             \
+        goto *next_op[in->op];                                                          \
+        BATCH_OPS(BATCH_STEP)                                                           \
+        BATCH_STEP_AS(L_BAD, ism_op_has_reg_b(in->op), NEAREST)                         \
+    tape_done:;                                                                         \
+        size_t r = (size_t)t->result * ISM_IV_CHUNK;                                    \
+        unpack(lo + r, nh + r, out + done, k);                                          \
     }                                                                                   \
     rounding_set(mode);
 
