@@ -92,6 +92,20 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
         q[2][k] = (d[k] + a[k]) / 2;
         q[3][k] = (a[k] + b[k] + d[k]) / 3;
     }
+    /* A point farther from every curve than r by its corners' distances (a corner's, less
+     * how far the point lies from it; a corner with nothing within r + reach, or outside the
+     * curves' box grown by that, counts r + reach) asks nothing: no query of it could answer
+     * within r. The bound is grown by more than the rounding of the distances. */
+    const double *corner[3] = {a, b, d};
+    bool ask[4];
+    for (int j = 0; j < 4; j++) {
+        double lb = 0, mag = cf_max2(fabs(q[j][0]), cf_max2(fabs(q[j][1]), fabs(q[j][2])));
+        for (int k = 0; k < 3; k++) {
+            double dk = isfinite(vd[k]) ? vd[k] : tb->r + tb->reach;
+            lb = cf_max2(lb, dk - ism_dist3(q[j], corner[k]));
+        }
+        ask[j] = !(lb > tb->r + CF_QUERY_SLACK * (lb + mag));
+    }
     /* near the rim of the cut only: the curves nearest its corners (all of them when a
      * corner is beyond the memo's reach, a triangle longer than reach) */
     bool all = !(isfinite(vd[0]) && isfinite(vd[1]) && isfinite(vd[2]));
@@ -99,7 +113,7 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
         if (!all && vc[0] != i && vc[1] != i && vc[2] != i)
             continue;
         for (int j = 0; j < 4; j++)
-            if (isfinite(cf_polyline_nearest(&tb->pl[i], q[j], tb->r, NULL, NULL)))
+            if (ask[j] && isfinite(cf_polyline_nearest(&tb->pl[i], q[j], tb->r, NULL, NULL)))
                 return true;
     }
     return false;
