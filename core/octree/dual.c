@@ -82,19 +82,55 @@ static void set_grid(dual *d, const double box[6], int depth)
 
 /* f and the unit gradients at the lattice points q[0..n) (n <= 27), at p (their
  * coordinates, given), into f and g (f 0 where its sign is rounding noise:
- * ism_sample_zero_by_rounding), through the point memo, as neighbouring nodes share corners
- * (a split's 27 points hold the parent's 8 and the 18 on its faces and edges that the
- * neighbours' splits sample too): ism_point_memo_many, the memo as one point at a time
- * leaves it, the misses' values in one batch. */
+ * ism_sample_zero_by_rounding), through the thread's point memo, as neighbouring nodes share
+ * corners (a split's 27 points hold the parent's 8 and the 18 on its faces and edges that the
+ * neighbours' splits sample too). The memo is looked up as ism_point_memo_many (cell_cache.h)
+ * looks up its own — in order, a miss taking its slot at once, the misses' values in one
+ * batch — but keeps the finished values, normalised and with the zero taken, so a hit is
+ * read as it stands: normalising every point asked for, hits and all, cost the sphere at E
+ * 1.3e-3 0.39M instructions of 27.86M (a point's zero test, and its count of an interval
+ * where it takes one, then come once a point evaluated, not once a node asking). */
 static void sample_points(dual *d, worker *w, const int32_t (*q)[3], size_t n, double *f,
                           double (*p)[3], double (*g)[3])
 {
-    uint64_t key[ISM_POINT_MEMO_MANY];
-    ism_point_memo_many(w->points, w->bits, q, (const double (*)[3])p, n, &w->s, f, g, key);
+    ism_point_entry *slot[ISM_POINT_MEMO_MANY];
+    uint64_t key[ISM_POINT_MEMO_MANY], mask = ((uint64_t)1 << w->bits) - 1;
+    size_t miss[ISM_POINT_MEMO_MANY], nm = 0;
+    for (size_t j = 0; j < n; j++) { /* the slots asked for at once: their misses overlap */
+        key[j] = ism_lattice_key(q[j]);
+        slot[j] = &w->points[ism_cache_mix(key[j]) & mask];
+        __builtin_prefetch(slot[j], 1);
+    }
     for (size_t j = 0; j < n; j++) {
+        if (slot[j]->key == key[j]) {
+            f[j] = slot[j]->f;
+            memcpy(g[j], slot[j]->g, sizeof g[j]);
+            continue;
+        }
+        slot[j]->key = key[j];
+        miss[nm++] = j;
+    }
+    if (nm >= ISM_POINT_BATCH_MIN) {
+        double mp[ISM_POINT_MEMO_MANY][3], mf[ISM_POINT_MEMO_MANY], mg[ISM_POINT_MEMO_MANY][3];
+        for (size_t k = 0; k < nm; k++)
+            memcpy(mp[k], p[miss[k]], sizeof mp[k]);
+        ism_sample_grad_batch(&w->s, (const double (*)[3])mp, mf, mg, nm);
+        for (size_t k = 0; k < nm; k++) {
+            f[miss[k]] = mf[k];
+            memcpy(g[miss[k]], mg[k], sizeof mg[k]);
+        }
+    } else
+        for (size_t k = 0; k < nm; k++)
+            f[miss[k]] = ism_sample_grad(&w->s, p[miss[k]], g[miss[k]]);
+    for (size_t k = 0; k < nm; k++) {
+        size_t j = miss[k];
         double gn = ism_normalise3(g[j]); /* 0 at a critical point: no agreement there */
         if (f[j] != 0 && ism_sample_zero_by_rounding(&w->s, p[j], f[j], gn, d->finest_step))
             f[j] = 0; /* a zero for every node sharing the point, as the primal tiles take it */
+        if (slot[j]->key == key[j]) { /* not taken since by a later miss */
+            slot[j]->f = f[j];
+            memcpy(slot[j]->g, g[j], sizeof slot[j]->g);
+        }
     }
 }
 
@@ -242,6 +278,15 @@ static const uint32_t CHILD_CORNERS[8] = {CORNER_BITS(0), CORNER_BITS(1), CORNER
                                           CORNER_BITS(4), CORNER_BITS(9), CORNER_BITS(10),
                                           CORNER_BITS(12), CORNER_BITS(13)};
 
+/* The bits set in x (by halves, as __builtin_popcount is a libgcc call without -mpopcnt). */
+static inline int bits_set(uint32_t x)
+{
+    x -= x >> 1 & 0x55555555u;
+    x = (x & 0x33333333u) + (x >> 2 & 0x33333333u);
+    x = (x + (x >> 4)) & 0x0f0f0f0fu;
+    return (int)(x * 0x01010101u >> 24);
+}
+
 /* Are a split's children past min_depth, where batch_on's own judgement applies and the
  * batches are counted for it (expand), rather than above it, where they are always made? */
 static bool batch_judged(const dual *d, int parent_level)
@@ -295,18 +340,15 @@ static uint8_t children_free(const dual *d, worker *w, const dnode *parent, uint
     return free_bits;
 }
 
-/* Bit c: sag_split will ask for child c's centre foot (f and p at the 27 points, neg bit
- * j: f < 0 at point j): corners of both signs, finite, under the straddle move, between
+/* Bit c: sag_split will ask for child c's centre foot (p: the 27 points; bit j of finite:
+ * f finite at point j, of neg: f < 0 there): corners of both signs, finite, under the straddle move, between
  * min_depth and depth.max, inside the request's box. A child that asks for none after all
  * (classify's earlier answers) only costs its lane. */
-static uint8_t wanted_feet(const dual *d, int level, const double f[27], uint32_t neg,
+static uint8_t wanted_feet(const dual *d, int level, uint32_t finite, uint32_t neg,
                           const double (*p)[3])
 {
     if (!sag_may_split_any(d) || level >= d->o->max_depth || level < d->o->min_depth)
         return 0;
-    uint32_t finite = 0;
-    for (int j = 0; j < 27; j++)
-        finite |= (uint32_t)(isfinite(f[j]) != 0) << j;
     uint8_t want = 0;
     for (int c = 0; c < 8; c++) {
         uint32_t m = CHILD_CORNERS[c], first = (uint32_t)__builtin_ctz(m);
@@ -322,6 +364,8 @@ static uint8_t wanted_feet(const dual *d, int level, const double f[27], uint32_
  * children known free and their centre feet. */
 typedef struct split_in {
     double f[27], p[27][3], g[27][3];
+    uint32_t neg, ok; /* bit j: f < 0 at point j; f and the unit ∇f finite there
+                         (ism_dual_corner_finite) */
     uint8_t known;   /* bit c: child c's box known free (the parent's or children_free) */
     uint8_t wants;   /* bit c: sag_split will ask for child c's foot (wanted_feet) */
     uint8_t foot[8]; /* child c's centre foot (corner_view.foot) */
@@ -374,13 +418,18 @@ static void corners_task(void *ctx, size_t k, int thread)
                 memcpy(in->p[j], pj, sizeof pj);
             }
     sample_points(d, w, (const int32_t (*)[3])q, 27, in->f, in->p, in->g);
-    uint32_t neg = 0; /* bit j: f < 0 at point j */
-    for (int j = 0; j < 27; j++)
+    uint32_t neg = 0, finite = 0, ok = 0; /* bit j: f < 0, f finite, f and ∇f finite */
+    for (int j = 0; j < 27; j++) {
         neg |= (uint32_t)(in->f[j] < 0) << j;
+        finite |= (uint32_t)(isfinite(in->f[j]) != 0) << j;
+        ok |= (uint32_t)ism_dual_corner_finite(in->f[j], in->g[j]) << j;
+    }
+    in->neg = neg;
+    in->ok = ok;
     in->known = parent->free_kids | children_free(d, w, parent, neg,
                                                   (const double (*)[3])in->p, &out->batched);
     out->batch_free = (uint8_t)(in->known & ~parent->free_kids);
-    in->wants = wanted_feet(d, parent->level + 1, in->f, neg, (const double (*)[3])in->p);
+    in->wants = wanted_feet(d, parent->level + 1, finite, neg, (const double (*)[3])in->p);
     memset(in->foot, FOOT_UNKNOWN, sizeof in->foot);
 }
 
@@ -440,15 +489,16 @@ static void feet_task(void *ctx, size_t k, int thread)
 #define BATCH_ENCLOSURES 2
 
 /* leaf_kind of the children kids[0..8) of a split node (views: their corners) into kind:
- * every child's classify_head first, then the natural enclosures the undecided ones' tails
+ * every child's classify_head first (but those in empty, bit c: child c found DN_EMPTY by
+ * split_task from the masks, its view not made), then the natural enclosures the undecided ones' tails
  * take in one batch (bit for bit the box-by-box pass's, its records kept for the Taylor
  * models' jets over the same boxes: classify_tail takes them from v->g), then the Taylor
  * models of those whose tails will tighten made at once (ism_dual_pre_models; when it runs,
  * its centre batch, ism_eval_interval_grad_batch, resets the records of the siblings it did
  * not pick: their tails' jets, if any, run whole), then the tails and box_kind. Child by
  * child near singular points (leaf_kind's balls come first). */
-static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, int kind[8],
-                      bool *bad)
+static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, uint8_t empty,
+                      int kind[8], bool *bad)
 {
     if (d->nballs) {
         for (int c = 0; c < 8; c++)
@@ -459,7 +509,7 @@ static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, int k
     ism_ivgrad g[8];
     int at[8], nb = 0;
     for (int c = 0; c < 8; c++) {
-        kind[c] = ism_dual_classify_head(d, w, &kids[c], &views[c]);
+        kind[c] = empty >> c & 1 ? DN_EMPTY : ism_dual_classify_head(d, w, &kids[c], &views[c]);
         if (kind[c] != UNDECIDED || !tail_wants_g(d, &views[c]) || d->crease)
             continue; /* a crease's tape has its min/max: not one the batch takes */
         ism_dual_node_box(&views[c], box[nb]);
@@ -475,6 +525,8 @@ static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, int k
         ism_dual_pre_models(w, kids, views, at, nb);
     }
     for (int c = 0; c < 8; c++) {
+        if (empty >> c & 1)
+            continue; /* box_kind leaves DN_EMPTY as it is */
         if (kind[c] == UNDECIDED)
             kind[c] = ism_dual_classify_tail(d, w, &kids[c], &views[c]);
         kind[c] = box_kind(d, w, &kids[c], &views[c], kind[c], bad);
@@ -499,22 +551,35 @@ static void split_task(void *ctx, size_t k, int thread)
     out->kinked = 0;
     dnode kids[8];
     corner_view views[8];
+    uint8_t empty = 0; /* bit c: child c empty from the masks alone (no view made) */
     for (int c = 0; c < 8; c++) {
         corner_view *v = &views[c];
         v->kinked = false;
         v->placed = FOOT_UNKNOWN;
-        v->foot = in->foot[c];
-        memcpy(v->foot_at, in->foot_at[c], sizeof v->foot_at);
-        if (v->foot == FOOT_AT)
-            v->foot_jet = in->foot_jet[c];
-        v->known_free = known >> c & 1;
         v->free_kids = 0;
+        uint32_t m = CHILD_CORNERS[c], neg = in->neg & m; /* classify_head's look at the
+                                                             corners, from the masks */
+        v->corners = (in->ok & m) != m ? CORNERS_NOT_FINITE : (uint8_t)(1 + bits_set(neg));
         dnode *n = &kids[c];
         memset(n, 0, sizeof *n);
         n->o = parent->o;
         for (int a = 0; a < 3; a++)
             n->o.v[a] += ((c >> a) & 1) * half;
         n->level = (uint8_t)(parent->level + 1);
+        /* corners of one sign in a box shown free: classify_head's first answer, DN_EMPTY,
+           whatever else the view holds (not so near points: leaf_kind asks the balls first) */
+        if (!d->nballs && v->corners != CORNERS_NOT_FINITE && (neg == 0 || neg == m) &&
+            (known >> c & 1)) {
+            empty |= (uint8_t)(1u << c);
+            for (int j = 0; j < 8; j++)
+                n->f[j] = f[SPLIT_OFF[c] + SPLIT_OFF[j]];
+            continue;
+        }
+        v->foot = in->foot[c];
+        memcpy(v->foot_at, in->foot_at[c], sizeof v->foot_at);
+        if (v->foot == FOOT_AT)
+            v->foot_jet = in->foot_jet[c];
+        v->known_free = known >> c & 1;
 #pragma GCC unroll 8 /* constant offsets: 64 corners a split, ~40% of split_task's own */
         for (int j = 0; j < 8; j++) {
             int at = SPLIT_OFF[c] + SPLIT_OFF[j];
@@ -524,7 +589,7 @@ static void split_task(void *ctx, size_t k, int thread)
         }
     }
     int kind[8];
-    kid_kinds(d, w, kids, views, kind, &out->bad);
+    kid_kinds(d, w, kids, views, empty, kind, &out->bad);
     for (int c = 0; c < 8; c++) {
         corner_view *v = &views[c];
         memcpy(out->f[c], kids[c].f, sizeof kids[c].f);
@@ -640,7 +705,7 @@ static void expand(dual *d, const int32_t *list, size_t n)
         for (size_t k = 0; k < n; k++)
             if (batch_judged(d, d->n[cur[k]].level)) {
                 d->batches += out[k].batched;
-                d->batch_freed += (uint64_t)__builtin_popcount(out[k].batch_free);
+                d->batch_freed += (uint64_t)bits_set(out[k].batch_free);
             }
         /* the level's room at once (the sag_split vertices' too, where there are any):
            one node at a time, the tree's doublings copied it over and over (sphere at E
@@ -1084,6 +1149,7 @@ static enum ism_dual_status mesh_rounds(dual *d, ism_mesh *mesh, ism_dual_stats 
     v.foot = FOOT_UNKNOWN;
     v.known_free = false;
     v.free_kids = 0;
+    v.corners = 0; /* classify_head looks at them */
     int32_t last = (int32_t)1 << d->g.depth, q[8][3];
     dnode *r0 = &d->n[root];
     for (int c = 0; c < 8; c++)

@@ -167,32 +167,31 @@ static bool same_sign_edge_clear(dual *d, worker *w, const dnode *n, const corne
     return edge_root_pair(d, w, n, v, c0, c1) == 0;
 }
 
-/* Crossed edges on every face 0 or 2 (one curve): from the corners' signs alone. */
-static bool plain_faces(const dual *d, const dnode *n)
+/* Bit c: f < 0 at node n's corner c. */
+static unsigned corner_signs(const dnode *n)
 {
-    int crossed[6] = {0};
-    for (int e = 0; e < 12; e++) {
-        int c0 = d->ec0[e], c1 = d->ec1[e];
-        if ((n->f[c0] < 0) != (n->f[c1] < 0)) {
-            crossed[d->ef[e][0]]++;
-            crossed[d->ef[e][1]]++;
-        }
-    }
-    for (int k = 0; k < 6; k++)
-        if (crossed[k] > 2)
-            return false;
-    return true;
+    unsigned signs = 0;
+    for (int c = 0; c < 8; c++)
+        signs |= (unsigned)(n->f[c] < 0) << c;
+    return signs;
+}
+
+/* Crossed edges on every face 0 or 2 (one curve): from the corners' signs alone. */
+static bool plain_faces(const dnode *n)
+{
+    return ism_dual_faces_plain(ism_dual_crossed_edges(corner_signs(n)));
 }
 
 /* Crossed edges on every face 0 or 2 (one curve), and no root on an edge whose ends share
- * a sign (the faces first: signs alone). */
+ * a sign (the faces first: signs alone; then the edges in ism_cube_edges' order). */
 static bool plain_edges(dual *d, worker *w, const dnode *n, const corner_view *v)
 {
-    if (!plain_faces(d, n))
+    unsigned crossed = ism_dual_crossed_edges(corner_signs(n));
+    if (!ism_dual_faces_plain(crossed))
         return false;
-    for (int e = 0; e < 12; e++) {
-        int c0 = d->ec0[e], c1 = d->ec1[e];
-        if ((n->f[c0] < 0) == (n->f[c1] < 0) && !same_sign_edge_clear(d, w, n, v, e, c0, c1))
+    for (unsigned same = ~crossed & 0xfffu; same; same &= same - 1) {
+        int e = __builtin_ctz(same);
+        if (!same_sign_edge_clear(d, w, n, v, e, d->ec0[e], d->ec1[e]))
             return false;
     }
     return true;
@@ -487,7 +486,7 @@ static int crease_kind(dual *d, worker *w, dnode *n, corner_view *v)
      * to depth.max. Its faces still hold one crossing curve each (two on a face made
      * Barth's sextic at 1e-2 non-manifold along 4 edges by the crease). */
     if (has_sheet(kind) && kind != DN_PAIR &&
-        (small ? !plain_faces(d, n) : !plain_edges(d, w, n, v)))
+        (small ? !plain_faces(n) : !plain_edges(d, w, n, v)))
         /* at depth.max a crease leaf may have a face crossed four times by two branches'
            curves (the ridge along its diagonal): its neighbour there is a pair leaf */
         kind = kind == DN_CREASE && small && last &&
@@ -496,7 +495,7 @@ static int crease_kind(dual *d, worker *w, dnode *n, corner_view *v)
                    : DN_INNER;
     /* at depth.max a small leaf with plain faces whose crease point Newton missed (more than
        half a cell outside, or not converging) is a plain leaf: the measurement judges it */
-    if (kind == DN_INNER && k == ISM_CREASE_SPLIT && small && last && plain_faces(d, n))
+    if (kind == DN_INNER && k == ISM_CREASE_SPLIT && small && last && plain_faces(n))
         kind = DN_SURF;
     v->kinked = kind == DN_INNER;
     return kind;
@@ -650,11 +649,16 @@ int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v)
     int neg = 0;
     v->placed = FOOT_UNKNOWN;
     v->pre_g = v->pre_model = v->pre_forms = false;
-    for (int c = 0; c < 8; c++) {
-        if (!isfinite(n->f[c]) || !isfinite(v->n[c][0] + v->n[c][1] + v->n[c][2]))
-            return DN_INNER;
-        neg += n->f[c] < 0;
-    }
+    if (v->corners == CORNERS_NOT_FINITE)
+        return DN_INNER;
+    if (v->corners)
+        neg = v->corners - 1;
+    else
+        for (int c = 0; c < 8; c++) {
+            if (!ism_dual_corner_finite(n->f[c], v->n[c]))
+                return DN_INNER;
+            neg += n->f[c] < 0;
+        }
     bool mixed = neg != 0 && neg != 8;
     /* shown free by its parent's proofs or its interval (known_free): above depth.min too,
      * as nothing in it is meshed at any depth (children_free's batches start at level 1) */

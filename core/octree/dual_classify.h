@@ -4,6 +4,7 @@
 #ifndef ISM_DUAL_CLASSIFY_H
 #define ISM_DUAL_CLASSIFY_H
 
+#include <math.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include "core/octree/dual_cert.h"
@@ -34,6 +35,11 @@ typedef struct corner_view {
     uint8_t free_kids;
     /* classify_head's count of corners < 0, for classify_tail */
     int neg;
+    /* In: 0, classify_head looks at the corners itself; CORNERS_NOT_FINITE, some corner's f
+     * or unit ∇f is not finite; else 1 + the count of corners < 0 (split_task reads them
+     * off its 27 points' masks, each point looked at once, not once for each child holding
+     * it: sphere at E 1.3e-3, ~720K instructions of classify_head's 3.0M) */
+    uint8_t corners;
     /* In (classify_tail): f and ∇f's natural enclosure over the box is in g already, taken
      * in one batch with the node's siblings' (kid_kinds); classify_head clears it. */
     bool pre_g;
@@ -51,6 +57,43 @@ typedef struct corner_view {
 
 /* classify_head's answer when the corners leave the node to classify_tail. */
 #define UNDECIDED (-1)
+/* corner_view.corners when some corner is not finite. */
+#define CORNERS_NOT_FINITE 0xff
+
+/* Are a corner's f and unit ∇f n finite (classify_head's first test)? */
+static inline bool ism_dual_corner_finite(double f, const double n[3])
+{
+    return isfinite(f) && isfinite(n[0] + n[1] + n[2]);
+}
+
+/* Bit e (ism_cube_edges' order, corners.c: along x, then y, then z): edge e's ends have
+ * opposite signs in signs (bit c: f < 0 at corner c). By shifts, not a loop over the edges:
+ * the plain-leaf tests ask it of every surface leaf (sphere at E 1.3e-3, 2,048 leaves: the
+ * loops' sign tests were ~0.6M instructions). */
+static inline unsigned ism_dual_crossed_edges(unsigned signs)
+{
+    unsigned x = (signs ^ signs >> 1) & 0x55u; /* bit c: corners c, c + 1 (c = 0 2 4 6) */
+    unsigned y = (signs ^ signs >> 2) & 0x33u; /* bit c: c, c + 2 (c = 0 1 4 5) */
+    unsigned z = (signs ^ signs >> 4) & 0x0fu; /* bit c: c, c + 4 (c = 0 1 2 3) */
+    return (x & 1u) | (x >> 1 & 2u) | (x >> 2 & 4u) | (x >> 3 & 8u) | /* edges 0-3 */
+           (y & 1u) << 4 | (y >> 4 & 1u) << 5 | (y >> 1 & 1u) << 6 | (y >> 5 & 1u) << 7 |
+           z << 8;
+}
+
+/* The edges (ism_dual_crossed_edges' bits) of each face of the cube (ism_cube_edges' face
+ * numbers). */
+static const unsigned ISM_DUAL_FACE_EDGES[6] = {0x530, 0xac0, 0x305, 0xc0a, 0x053, 0x0ac};
+
+/* Crossed edges (ism_dual_crossed_edges) 0 or 2 on every face (one curve): a face's crossed
+ * edges are even in number (its corners' signs go round a loop), so a face fails only with
+ * all four crossed. */
+static inline bool ism_dual_faces_plain(unsigned crossed)
+{
+    for (int k = 0; k < 6; k++)
+        if ((crossed & ISM_DUAL_FACE_EDGES[k]) == ISM_DUAL_FACE_EDGES[k])
+            return false;
+    return true;
+}
 
 /* The node's box from its corners 0 and 7: one builder, since a jet takes a batch's record
  * only for a box equal to the bit (kid_kinds's batch, classify_tail's jet). */
