@@ -527,7 +527,7 @@ static bool switch_near(ism_sampler *s, const double p[3], double reach, double 
     return !(fabs(v[0] - v[1]) > reach * ism_norm3(gd));
 }
 
-double ism_dual_kink_dist(ism_sampler *s, const double p[3], double plain, double e)
+double ism_dual_kink_dist_near(ism_sampler *s, const double p[3], double plain, double e)
 {
     double v[2], g[2][3], x[3];
     if (!switch_near(s, p, SWITCH_MARGIN * plain, v, g))

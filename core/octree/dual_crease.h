@@ -12,6 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include "core/eval/interval_jet.h"
+#include "core/expr/tape.h"
 #include "core/octree/sampler.h"
 
 /* What a node with a kink (both branches possible over its box) is. */
@@ -84,7 +85,16 @@ int ism_dual_mean_value_sign(const double f[8], const ism_ivgrad *g, const doubl
  * feet x of Newton along a, along b and onto the crease (each an upper bound of the distance
  * to first order at x: f = 0 is reached through x). e: the bound (Newton stops once a step
  * is below 1e-3 e: the residual is counted). */
-double ism_dual_kink_dist(ism_sampler *s, const double p[3], double plain, double e);
+double ism_dual_kink_dist_near(ism_sampler *s, const double p[3], double plain, double e);
+/* ... the first test inline: every measured midpoint and centroid asks (sphere at E 7.14e-3,
+ * 3,204 calls of ~32 instructions each out of line). */
+static inline double ism_dual_kink_dist(ism_sampler *s, const double p[3], double plain,
+                                        double e)
+{
+    if (!ism_tape_top_minmax(s->tape)) /* no switch surface (as switch_near answers) */
+        return plain;
+    return ism_dual_kink_dist_near(s, p, plain, e);
+}
 
 /* Does a triangle with normal nrm (any length) and centroid c face along the gradient of
  * either branch (cosine above cos_min), the switch surface a = b within reach of c to first

@@ -490,7 +490,7 @@ void ism_dual_emit_quads(dual *d)
     uint32_t *diag = malloc((nq ? nq : 1) * 4 * sizeof *diag);
     uint32_t *first = malloc((nq ? nq : 1) * sizeof *first), *list = NULL, *fq = NULL;
     uint8_t *fan = calloc(nq ? nq : 1, 1), *miss = NULL;
-    double *centre = NULL;
+    double *centre = NULL, *ddist = malloc((nq ? nq : 1) * 2 * sizeof *ddist);
     size_t nd = 0, nl = 0, nf = 0;
     bool ok = diag && first && fan;
     for (size_t q = 0; ok && q < nq; q++) {
@@ -500,13 +500,16 @@ void ism_dual_emit_quads(dual *d)
         uint32_t pairs[4] = {u[0], u[2], u[1], u[3]};
         memcpy(&diag[4 * nd++], pairs, sizeof pairs);
     }
-    if (ok)
-        measure_pairs(d, diag, 2 * nd, NULL);
+    /* the diagonals' distances as measured (NULL: mid_dist looks them up) */
+    if (!ok || !ddist || !measure_pairs(d, diag, 2 * nd, ddist)) {
+        free(ddist);
+        ddist = NULL;
+    }
     d->nt = 0;
     /* two triangles a quad at most before the fans: room at once (add_tri growing one at a
        time copied the array through its doublings; out of memory here, add_tri grows) */
     grow((void **)&d->tri, &d->capt, 2 * nq, 3 * sizeof *d->tri);
-    for (size_t q = 0; q < nq && ok; q++) {
+    for (size_t q = 0, k = 0; q < nq && ok; q++) {
         const uint32_t *u = &d->q.q[4 * q];
         first[q] = (uint32_t)d->nt;
         if (u[3] == UINT32_MAX) {
@@ -515,7 +518,10 @@ void ism_dual_emit_quads(dual *d)
         }
         uint64_t key = quad_key(d, u);
         const double *known = key ? keyed_get(&d->fans, key) : NULL;
-        int a = ism_dual_mid_dist(d, u[0], u[2]) <= ism_dual_mid_dist(d, u[1], u[3]) ? 0 : 1;
+        double d02 = ddist ? ddist[2 * k] : ism_dual_mid_dist(d, u[0], u[2]);
+        double d13 = ddist ? ddist[2 * k + 1] : ism_dual_mid_dist(d, u[1], u[3]);
+        k++;
+        int a = d02 <= d13 ? 0 : 1;
         ok = add_tri(d, u[a], u[a + 1], u[a + 2]) && add_tri(d, u[a], u[a + 2], u[(a + 3) % 4]);
         if (known) { /* cut as a fan in an earlier round: its centre kept */
             fan[q] = 2;
@@ -590,6 +596,7 @@ void ism_dual_emit_quads(dual *d)
     if (!ok)
         d->nomem = true;
     free(diag);
+    free(ddist);
     free(first);
     free(list);
     free(fq);
