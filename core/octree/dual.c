@@ -341,7 +341,8 @@ static uint8_t children_free(const dual *d, worker *w, const dnode *parent, uint
 }
 
 /* Bit c: sag_split will ask for child c's centre foot (p: the 27 points; bit j of finite:
- * f finite at point j, of neg: f < 0 there): corners of both signs, finite, under the straddle move, between
+ * f and ∇f finite at point j, of neg: f < 0 there): corners of both signs, finite (else
+ * classify_head answers before sag_split), under the straddle move, between
  * min_depth and depth.max, inside the request's box. A child that asks for none after all
  * (classify's earlier answers) only costs its lane. */
 static uint8_t wanted_feet(const dual *d, int level, uint32_t finite, uint32_t neg,
@@ -418,10 +419,9 @@ static void corners_task(void *ctx, size_t k, int thread)
                 memcpy(in->p[j], pj, sizeof pj);
             }
     sample_points(d, w, (const int32_t (*)[3])q, 27, in->f, in->p, in->g);
-    uint32_t neg = 0, finite = 0, ok = 0; /* bit j: f < 0, f finite, f and ∇f finite */
+    uint32_t neg = 0, ok = 0; /* bit j: f < 0 at point j; f and ∇f finite there */
     for (int j = 0; j < 27; j++) {
         neg |= (uint32_t)(in->f[j] < 0) << j;
-        finite |= (uint32_t)(isfinite(in->f[j]) != 0) << j;
         ok |= (uint32_t)ism_dual_corner_finite(in->f[j], in->g[j]) << j;
     }
     in->neg = neg;
@@ -429,7 +429,7 @@ static void corners_task(void *ctx, size_t k, int thread)
     in->known = parent->free_kids | children_free(d, w, parent, neg,
                                                   (const double (*)[3])in->p, &out->batched);
     out->batch_free = (uint8_t)(in->known & ~parent->free_kids);
-    in->wants = wanted_feet(d, parent->level + 1, finite, neg, (const double (*)[3])in->p);
+    in->wants = wanted_feet(d, parent->level + 1, ok, neg, (const double (*)[3])in->p);
     memset(in->foot, FOOT_UNKNOWN, sizeof in->foot);
 }
 
