@@ -563,6 +563,7 @@ static void split_task(void *ctx, size_t k, int thread)
         dnode *n = &kids[c];
         memset(n, 0, sizeof *n);
         n->o = parent->o;
+#pragma GCC unroll 3
         for (int a = 0; a < 3; a++)
             n->o.v[a] += ((c >> a) & 1) * half;
         n->level = (uint8_t)(parent->level + 1);
@@ -571,6 +572,7 @@ static void split_task(void *ctx, size_t k, int thread)
         if (!d->nballs && v->corners != CORNERS_NOT_FINITE && (neg == 0 || neg == m) &&
             (known >> c & 1)) {
             empty |= (uint8_t)(1u << c);
+#pragma GCC unroll 8
             for (int j = 0; j < 8; j++)
                 n->f[j] = f[SPLIT_OFF[c] + SPLIT_OFF[j]];
             continue;
@@ -724,6 +726,7 @@ static void expand(dual *d, const int32_t *list, size_t n)
             for (int c = 0; c < 8; c++) {
                 ism_ipt o = d->n[i].o;
                 int32_t at;
+#pragma GCC unroll 3
                 for (int a = 0; a < 3; a++)
                     o.v[a] += ((c >> a) & 1) * half;
                 if (!new_node(d, o, level, &at)) {

@@ -563,6 +563,7 @@ static long count_loops(const clip *c, size_t k, const uint32_t *next_of, uint8_
 
 void ism_dual_centroid(const double *p[3], double c[3])
 {
+#pragma GCC unroll 3
     for (int a = 0; a < 3; a++)
         c[a] = (p[0][a] + p[1][a] + p[2][a]) / 3;
 }

@@ -20,6 +20,7 @@ static inline uint64_t pair_key(uint32_t a, uint32_t b)
 static inline void pair_mid(const dual *d, uint64_t key, double m[3])
 {
     uint32_t a = (uint32_t)((key - 1) >> 32), b = (uint32_t)(key - 1);
+#pragma GCC unroll 3
     for (int k = 0; k < 3; k++)
         m[k] = 0.5 * (d->pos[3 * a + k] + d->pos[3 * b + k]);
 }
