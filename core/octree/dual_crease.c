@@ -147,8 +147,10 @@ int ism_dual_mean_value_sign(const double f[8], const ism_ivgrad *g, const doubl
             gain_lo[k][far] = min_of(0, min_of(p, q));
             gain_hi[k][far] = max_of(0, max_of(p, q));
         }
-    double low = -INFINITY, high = INFINITY;
-    bool touch = false;
+    /* f's least bound from some corner above 0 (the 8 bounds intersected: their largest
+     * low above 0), or its most from some corner below 0; a NaN bound shows nothing (its
+     * comparisons are false) */
+    bool above = false, below = false, touch = false;
     /* unrolled (every index a constant): 620 instructions a call rolled on the torus */
     _Pragma("GCC unroll 8") for (int c = 0; c < 8; c++) {
         double a = f[c], b = f[c];
@@ -157,10 +159,10 @@ int ism_dual_mean_value_sign(const double f[8], const ism_ivgrad *g, const doubl
             b += gain_hi[k][(c >> k) & 1];
         }
         touch |= f[c] == 0 && a == 0; /* f >= 0 from a zero corner: only zeros added */
-        low = max_of(low, a);
-        high = min_of(high, b);
+        above |= a > 0;
+        below |= b < 0;
     }
-    return low > 0 || touch ? 1 : high < 0 ? -1 : 0;
+    return above || touch ? 1 : below ? -1 : 0;
 }
 
 /* Is f's top instruction a max (else a min)? */
