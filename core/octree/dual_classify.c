@@ -577,19 +577,10 @@ bool ism_dual_foot_in_node(worker *w, const double lo[3], const double hi[3], do
     return ism_dual_newton_onto(w, m, size) && in_closed_box(m, lo, hi);
 }
 
-/* foot_in_node for n boxes at once (lo[k]..hi[k] of side size[k], n <= ISM_GRAD_BATCH):
- * ism_dual_newton_onto's steps in lanes, their gradients in one batch a step
- * (ism_sample_grad_batch: bit for bit ism_sample_grad's), a lane leaving where its own scalar
- * run would stop. Into m[k] and state[k]: FOOT_AT when the foot lands in the closed box,
- * else FOOT_OUT. */
-void ism_dual_feet_in_nodes(worker *w, const double (*lo)[3], const double (*hi)[3],
-                          const double *size, size_t n, double (*m)[3], uint8_t *state)
+void ism_dual_newton_lanes(worker *w, double (*m)[3], const double *size, size_t n, bool *ok)
 {
     size_t live[ISM_GRAD_BATCH], nl = 0;
-    bool ok[ISM_GRAD_BATCH];
     for (size_t k = 0; k < n; k++) {
-        for (int a = 0; a < 3; a++)
-            m[k][a] = 0.5 * lo[k][a] + 0.5 * hi[k][a];
         ok[k] = true;
         live[nl++] = k;
     }
@@ -608,6 +599,20 @@ void ism_dual_feet_in_nodes(worker *w, const double (*lo)[3], const double (*hi)
         }
         nl = kept;
     }
+}
+
+/* foot_in_node for n boxes at once (lo[k]..hi[k] of side size[k], n <= ISM_GRAD_BATCH):
+ * ism_dual_newton_lanes from their centres. Into m[k] and state[k]: FOOT_AT when the foot
+ * lands in the closed box, else FOOT_OUT. */
+void ism_dual_feet_in_nodes(worker *w, const double (*lo)[3], const double (*hi)[3],
+                          const double *size, size_t n, double (*m)[3], uint8_t *state)
+{
+    bool ok[ISM_GRAD_BATCH];
+    for (size_t k = 0; k < n; k++)
+#pragma GCC unroll 3
+        for (int a = 0; a < 3; a++)
+            m[k][a] = 0.5 * lo[k][a] + 0.5 * hi[k][a];
+    ism_dual_newton_lanes(w, m, size, n, ok);
     for (size_t k = 0; k < n; k++)
         state[k] = ok[k] && in_closed_box(m[k], lo[k], hi[k]) ? FOOT_AT : FOOT_OUT;
 }

@@ -189,6 +189,10 @@ static inline size_t chunks(size_t n)
  * size (dual_classify.c's; dual.c's leaf vertices and dual_measure.c's fan centres call it
  * too); false when it could not finish a step (∇f vanishing or not finite). */
 bool ism_dual_newton_onto(worker *w, double m[3], double size);
+/* ism_dual_newton_onto for the n <= ISM_GRAD_BATCH points m[k] (each by its size[k]) at
+ * once, each step's gradients in one batch (ism_sample_grad_batch: bit for bit the scalar
+ * run's), a lane leaving where its own run would stop: its answer into ok[k]. */
+void ism_dual_newton_lanes(worker *w, double (*m)[3], const double *size, size_t n, bool *ok);
 
 /* Room for n more vertices (positions and leaves; dual.c's, dual_measure.c's fan centres
  * take room by it too); false when out of memory. */
