@@ -6,6 +6,7 @@
 #include "core/octree/dual_classify.h"
 #include "core/eval/interval_jet.h"
 #include "core/octree/cell_cache.h"
+#include "core/octree/corners.h"
 #include "core/octree/dual_crease.h"
 #include "core/octree/edge_roots.h"
 #include "core/octree/graph_cert.h"
@@ -180,14 +181,14 @@ static unsigned corner_signs(const dnode *n)
 /* Crossed edges on every face 0 or 2 (one curve): from the corners' signs alone. */
 static bool plain_faces(const dnode *n)
 {
-    return ism_dual_faces_plain(ism_dual_crossed_edges(corner_signs(n)));
+    return ism_dual_faces_plain(ism_edges_across(corner_signs(n)));
 }
 
 /* Crossed edges on every face 0 or 2 (one curve), and no root on an edge whose ends share
  * a sign (the faces first: signs alone; then the edges in ism_cube_edges' order). */
 static bool plain_edges(dual *d, worker *w, const dnode *n, const corner_view *v)
 {
-    unsigned crossed = ism_dual_crossed_edges(corner_signs(n));
+    unsigned crossed = ism_edges_across(corner_signs(n));
     if (!ism_dual_faces_plain(crossed))
         return false;
     for (unsigned same = ~crossed & 0xfffu; same; same &= same - 1) {

@@ -66,25 +66,11 @@ static inline bool ism_dual_corner_finite(double f, const double n[3])
     return isfinite(f) && isfinite(n[0] + n[1] + n[2]);
 }
 
-/* Bit e (ism_cube_edges' order, corners.c: along x, then y, then z): edge e's ends have
- * opposite signs in signs (bit c: f < 0 at corner c). By shifts, not a loop over the edges:
- * the plain-leaf tests ask it of every surface leaf (sphere at E 1.3e-3, 2,048 leaves: the
- * loops' sign tests were ~0.6M instructions). */
-static inline unsigned ism_dual_crossed_edges(unsigned signs)
-{
-    unsigned x = (signs ^ signs >> 1) & 0x55u; /* bit c: corners c, c + 1 (c = 0 2 4 6) */
-    unsigned y = (signs ^ signs >> 2) & 0x33u; /* bit c: c, c + 2 (c = 0 1 4 5) */
-    unsigned z = (signs ^ signs >> 4) & 0x0fu; /* bit c: c, c + 4 (c = 0 1 2 3) */
-    return (x & 1u) | (x >> 1 & 2u) | (x >> 2 & 4u) | (x >> 3 & 8u) | /* edges 0-3 */
-           (y & 1u) << 4 | (y >> 4 & 1u) << 5 | (y >> 1 & 1u) << 6 | (y >> 5 & 1u) << 7 |
-           z << 8;
-}
-
-/* The edges (ism_dual_crossed_edges' bits) of each face of the cube (ism_cube_edges' face
- * numbers). */
+/* The edges (ism_edges_across' bits, corners.h) of each face of the cube (ism_cube_edges'
+ * face numbers). */
 static const unsigned ISM_DUAL_FACE_EDGES[6] = {0x530, 0xac0, 0x305, 0xc0a, 0x053, 0x0ac};
 
-/* Crossed edges (ism_dual_crossed_edges) 0 or 2 on every face (one curve): a face's crossed
+/* Crossed edges (ism_edges_across) 0 or 2 on every face (one curve): a face's crossed
  * edges are even in number (its corners' signs go round a loop), so a face fails only with
  * all four crossed. */
 static inline bool ism_dual_faces_plain(unsigned crossed)

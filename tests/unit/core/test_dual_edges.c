@@ -1,5 +1,5 @@
-/* test_dual_edges.c — the plain-leaf tests' edge and face masks (dual_classify.h:
- * ism_dual_crossed_edges, ism_dual_faces_plain) against the cube's edge table itself
+/* test_dual_edges.c — the plain-leaf tests' edge and face masks (corners.h ism_edges_across,
+ * dual_classify.h ism_dual_faces_plain) against the cube's edge table itself
  * (corners.h ism_cube_edge: each edge's two corners and two faces), for all 256 corner
  * signs: an edge is crossed when its corners' signs differ, and a face is plain when at most
  * two of the edges naming it are crossed. */
@@ -24,7 +24,7 @@ Test(dual_edges, crossed_edges_and_plain_faces_match_the_cube_table)
         bool plain = true;
         for (int k = 0; k < 6; k++)
             plain &= crossed_on[k] <= 2;
-        unsigned got = ism_dual_crossed_edges(signs);
+        unsigned got = ism_edges_across(signs);
         cr_assert_eq(got, want, "signs 0x%02x: crossed 0x%03x, the table's 0x%03x", signs, got,
                      want);
         cr_assert_eq(ism_dual_faces_plain(got), plain, "signs 0x%02x: plain faces", signs);
