@@ -29,7 +29,7 @@
  * irrational box does).
  *
  * A cone's merges stand only while the point keeps the thinnest angle they take or make
- * (cone_keep_floor): its triangles and those of the cone's vertices within reach, measured
+ * (cone_settle, with the end's rules): its triangles and those of the cone's vertices within reach, measured
  * before. The horn's ribbon is thinner than any cone (0.003-0.03° against 0.17-0.84° left,
  * every box of the sweep); near a cusp the tube's needles are mild and the cone may not be:
  * cusp-a2 at half the default bound, irrational box, took a 4.36° fan with its needles to a
@@ -53,7 +53,7 @@
 /* A merge may make no triangle whose smallest angle's sine is under this (0.057°): the cone's
  * triangles, as thin as the ring's edges are short against its distance from the point
  * (the horn's: 0.17° and more), keep an area that float32 positions hold. What a cone may
- * leave above it is cone_keep_floor's. */
+ * leave above it is cone_settle's floor. */
 #define RM_HORN_MIN_SINE 1e-3
 /* A cone takes at most this many merges (revB 4), each asking the link condition over c's
  * fan, which may grow by RM_HORN_RING_MAX triangles at most (a thin ring's size): the horn's
@@ -272,19 +272,21 @@ static void undo_step(rm_pass *p, const horn_step *s)
 }
 
 /* The cone's merges undone, last first, until every triangle they made keeps the end's rules
- * (revB 1: a triangle let pass for a corner a later merge was to take, whose merge was then
- * refused, would stay unchecked); returns how many were undone. Each triangle a merge makes
- * has c and two outer corners: a later merge of the cone either removes it (taking an outer
- * corner into c) or leaves it as made, so the rules are asked of each as its own merge
- * left it. */
-static size_t cone_settle(rm_pass *p, horn_step *log, size_t n)
+ * and c's thinnest triangle is no thinner than `floor` (cone_floor before the merges: every
+ * triangle a merge makes has c as a corner); returns how many were undone. Both are asked
+ * after every undo (revB 1, revK 1): a triangle let pass for a corner a later merge was to
+ * take comes back when that merge is undone, for either rule, and is asked again. Each
+ * triangle a merge makes has c and two outer corners: a later merge of the cone either
+ * removes it (taking an outer corner into c) or leaves it as made, so the rules are asked of
+ * each as its own merge left it. Both hold with no merge standing, so the loop ends. */
+static size_t cone_settle(rm_pass *p, horn_step *log, size_t n, uint32_t c, double floor)
 {
     size_t undone = 0;
     for (;;) {
         size_t i = 0;
         while (i < n && step_ends_ok(p, log + i))
             i++;
-        if (i == n)
+        if (i == n && !(fan_floor(p, c) < floor))
             return undone;
         undo_step(p, log + --n);
         undone++;
@@ -305,22 +307,9 @@ static double cone_floor(rm_pass *p, const horn_walk *h, size_t from, uint32_t c
     return floor;
 }
 
-/* The cone's last merges undone until c's thinnest triangle is no thinner than `floor`
- * (cone_floor before the merges: every triangle a merge makes has c as a corner); returns
- * how many were undone. */
-static size_t cone_keep_floor(rm_pass *p, horn_step *log, size_t n, uint32_t c, double floor)
-{
-    size_t undone = 0;
-    while (n && fan_floor(p, c) < floor) {
-        undo_step(p, log + --n);
-        undone++;
-    }
-    return undone;
-}
-
 /* Merges cone g's thin vertices within reach of c into c, nearest first, at most
  * RM_HORN_MERGES_MAX of them with c keeping at most RM_HORN_RING_MAX triangles more than it
- * had; returns how many stand (cone_settle, then cone_keep_floor against `floor`). */
+ * had; returns how many stand (cone_settle, against `floor`). */
 static size_t merge_cone(rm_pass *p, horn_walk *h, uint32_t c, uint32_t g, double reach,
                          double floor, bool *ok)
 {
@@ -363,8 +352,7 @@ static size_t merge_cone(rm_pass *p, horn_walk *h, uint32_t c, uint32_t g, doubl
         h->tag[h->refused[--h->nrefused]] = RM_HORN_OUT;
     if (!*ok)
         return made;
-    made -= cone_settle(p, h->log, made);
-    return made - cone_keep_floor(p, h->log, made, c, floor);
+    return made - cone_settle(p, h->log, made, c, floor);
 }
 
 /* The farthest corner from c of the needles lying wholly in cone g's thin rings (0: none). */
