@@ -65,6 +65,9 @@
  * cone). */
 #define ISM_RM_FAR_STEP 0.15
 
+/* The caller's cancel flag is up: the pass stops between steps, its mesh valid. */
+static bool stopped(const ism_remesh_options *o) { return o->cancel && *o->cancel; }
+
 /* Once the junction collapses have taken a crowd, once more: the crease slides, the flips
  * and the collapses where a needle is left (a collapse renames a crowd's vertices and
  * re-fans its rim, so moves and clusters refused before are asked again). three-balls with
@@ -72,13 +75,14 @@
  * 6.99°, with the flips 6.99°: the second collapse does it); the upper one keeps its 0.86°
  * (crowd28.md). Only runs whose first collapses took a crowd can change: in cusp22's sweep
  * three-balls' own / 1e-3 / 1e-4 boxes, 2 triangles fewer each. */
-static void junction_settle(rm_pass *p, bool *ok)
+static void junction_settle(rm_pass *p, const ism_remesh_options *o, bool *ok)
 {
-    if (rm_mark_active(p))
+    /* a cancel is asked between the steps, as the rounds ask it (revK 5) */
+    if (!stopped(o) && rm_mark_active(p))
         rm_crease_slide_sweep(p);
-    if (rm_mark_active(p))
+    if (!stopped(o) && rm_mark_active(p))
         rm_flip_active(p, ok);
-    if (*ok && p->poorest < rm_insert_poor())
+    if (*ok && !stopped(o) && p->poorest < rm_insert_poor())
         rm_junction_collapse(p, ok);
 }
 
@@ -150,8 +154,6 @@ static double min_angle_of(const ism_mesh *m, double *sine)
 }
 
 double ism_remesh_min_angle(const ism_mesh *m) { return min_angle_of(m, NULL); }
-
-static bool stopped(const ism_remesh_options *o) { return o->cancel && *o->cancel; }
 
 /* The mesh as the pass found it, kept until the pass ends: a mending may measure its
  * farthest edge midpoint (rm_midpoint_within); most passes never mend (the smooth presets'
@@ -335,7 +337,7 @@ bool ism_remesh_quality(ism_mesh *m, const ism_remesh_options *o, ism_remesh_sta
            (rm_junction.c) */
         if (ok && !stopped(o) && p.may_crease && p.poorest < rm_insert_poor() &&
             rm_junction_collapse(&p, &ok) && ok && !stopped(o))
-            junction_settle(&p, &ok);
+            junction_settle(&p, o, &ok);
         /* what no mending could shape, thin tubes ending at a given point: merged into it */
         if (ok && !stopped(o))
             rm_horn_tips(&p, o, &ok);
