@@ -82,6 +82,8 @@ static void junction_settle(rm_pass *p, const ism_remesh_options *o, bool *ok)
         rm_crease_slide_sweep(p);
     if (!stopped(o) && rm_mark_active(p))
         rm_flip_active(p, ok);
+    /* p->poorest is what rm_mark_active took before the flips: they make no triangle worse
+       than that (rm_pass.h), so a needle left is seen; no second rm_mark_active is needed */
     if (*ok && !stopped(o) && p->poorest < rm_insert_poor())
         rm_junction_collapse(p, ok);
 }
