@@ -29,8 +29,8 @@
  * irrational box does).
  *
  * A cone's merges stand only while the point keeps the thinnest angle they take or make
- * (cone_settle, with the end's rules): its triangles and those of the cone's vertices within reach, measured
- * before. The horn's ribbon is thinner than any cone (0.003-0.03° against 0.17-0.84° left,
+ * (cone_settle, with the end's rules): its triangles and those of the cone's vertices within
+ * reach, measured before (an over-approximation of what the merges take: cone_floor). The horn's ribbon is thinner than any cone (0.003-0.03° against 0.17-0.84° left,
  * every box of the sweep); near a cusp the tube's needles are mild and the cone may not be:
  * cusp-a2 at half the default bound, irrational box, took a 4.36° fan with its needles to a
  * 3.27° cone (5.02° with the rule); under f3bfebb's far step 8.27° needles to 1.66°. */
@@ -294,7 +294,12 @@ static size_t cone_settle(rm_pass *p, horn_step *log, size_t n, uint32_t c, doub
 }
 
 /* The thinnest triangle the cone's merges may take or make: c's, and every triangle at a
- * vertex of cone g (the walk's, from `from` on) within reach of c. */
+ * vertex of cone g (the walk's, from `from` on) within reach of c. It over-approximates what
+ * they take (revK 2): c's whole fan (every cone at the point), and the fans of vertices no
+ * merge took (locked, refused, undone), so a thin triangle no merge touched lowers the floor.
+ * The floor is measured against c's whole fan after (cone_settle), so it must hold c's other
+ * cones: narrowing one side alone would undo every merge beside a thinner cone. The horn's
+ * floors are its ribbon's either way (0.003-0.03°). */
 static double cone_floor(rm_pass *p, const horn_walk *h, size_t from, uint32_t c, uint32_t g,
                          double reach)
 {
