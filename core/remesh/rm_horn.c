@@ -25,15 +25,19 @@
  * (revB 5): the cone left from the point is measured as the horn's is (its new centroids
  * and midpoints within the bound, the link condition, the end's rules), and its triangles
  * touch the point. In the gallery at the default bound only horn-cyclide's cones merge, in
- * each of cusp22's five boxes (cusp-a2's 1e-3 box did until bdac44a; at half the bound its
- * irrational box does).
+ * each of cusp22's five boxes (cusp-a2's 1e-3 box did until bdac44a; under lower bounds
+ * more of its boxes do).
  *
  * A cone's merges stand only while the point keeps the thinnest angle they take or make
  * (cone_settle, with the end's rules): its triangles and those of the cone's vertices within
- * reach, measured before (an over-approximation of what the merges take: cone_floor). The horn's ribbon is thinner than any cone (0.003-0.03° against 0.17-0.84° left,
- * every box of the sweep); near a cusp the tube's needles are mild and the cone may not be:
- * cusp-a2 at half the default bound, irrational box, took a 4.36° fan with its needles to a
- * 3.27° cone (5.02° with the rule); under f3bfebb's far step 8.27° needles to 1.66°. */
+ * reach, measured before (an over-approximation of what the merges take: cone_floor). The
+ * horn's ribbon is thinner than any cone (0.003-0.03° against 0.17-0.84° left, every box of
+ * the sweep); near a cusp the tube's needles are mild and the cone may not be: cusp-a2 at
+ * half the default bound, irrational box, took a 4.36° fan with its needles to a 3.27° cone
+ * (5.02° with the rule); under f3bfebb's far step 8.27° needles to 1.66°. Under a user's
+ * bound below the default the rule undoes merges in more runs (revK 3's probe, cusp-a2,
+ * merges undone: 0.7 x irr 2, 0.25 x own 11, 0.35 x own 12, 0.25 x irr 3), so --quality good
+ * meshes there change with it; at the default bound it undoes none in the gallery. */
 #include "core/remesh/rm_merge.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/vec3.h"

@@ -474,7 +474,13 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
     # the bounds (x the default) the cone's floor holds under: at half of it the cusp's tube
     # is thin over more rings, and rm_horn.c's merges into the cusp, taking a 4.36 degree
     # fan, left a 3.27 degree cone in the irrational box, as they may until they keep the
-    # thinnest triangle they take or make (cone_keep_floor: 5.02)
+    # thinnest triangle they take or make (cone_settle's floor: 5.02). The floors above are
+    # fixed figures under the fans the pass leaves before rm_horn.c, not that rule's own
+    # property (no thinner than before the merges, which the output cannot show): a change
+    # that leaves a thinner fan there fails this with the rule intact (revK 4). Not at 0.25
+    # or 0.35, where the rule also undoes merges: the cusp's cone reads 3.56 / 3.28 / 3.82
+    # (0.25) and 3.90 / 3.16 / 4.09 (0.35) degrees in the own / 1e-3 / irr boxes, Whitney's
+    # 3.90 (0.25, irr) and 2.63 (0.35, 1e-3), under the fixed floors (mendK28's probe)
     AT_POINT_BOUNDS = (1.0, 0.5)
 
     def test_cone_at_a_cusp_and_a_pinch_point_no_thinner(self):
