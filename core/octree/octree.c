@@ -79,8 +79,8 @@ static bool contains(const ism_octree *t, const ism_node *nd, const int32_t o[3]
 
 /* ism_octree_find, from the nearest ancestor of `from` that contains o (the same node:
  * every path to o runs through it); parent NULL: from the root. o lies outside `from` (a
- * neighbour's origin), so the search starts at its parent; from is no root (the root
- * contains every point inside_root admits). */
+ * neighbour's origin), so the search starts at its parent; the root has none (parent[0] is
+ * -1) and contains every point inside_root admits, so from the root it starts there. */
 static int32_t find_near(const ism_octree *t, const int32_t *parent, int32_t from,
                          const int32_t o[3], int level)
 {
@@ -88,7 +88,7 @@ static int32_t find_near(const ism_octree *t, const int32_t *parent, int32_t fro
         return -1;
     if (!parent)
         return descend(t, 0, o, level);
-    int32_t i = parent[from];
+    int32_t i = from > 0 ? parent[from] : 0;
     while (i > 0 && !contains(t, &t->nodes[i], o))
         i = parent[i];
     return descend(t, i, o, level);
