@@ -36,12 +36,18 @@ bool ism_breaks_build(ism_breaks *b, const ism_octree *t, const uint8_t *take, i
 
 void ism_breaks_free(ism_breaks *b);
 
+/* The first slot probed for the point whose key's ism_cache_mix is `hash`. */
+static inline size_t ism_breaks_index(const ism_breaks *b, uint64_t hash)
+{
+    return (size_t)(hash & b->mask);
+}
+
 /* The registered point of lattice key `key`, whose ism_cache_mix is `hash` (a caller that
  * looks the point up in other tables too hashes it once), or NULL. */
 static inline const ism_break_point *ism_breaks_find_hashed(const ism_breaks *b, uint64_t key,
                                                             uint64_t hash)
 {
-    for (size_t s = hash & b->mask;; s = (s + 1) & b->mask) {
+    for (size_t s = ism_breaks_index(b, hash);; s = (s + 1) & b->mask) {
         const ism_break_point *e = &b->slots[s];
         if (e->key == key)
             return e;
@@ -57,20 +63,20 @@ static inline const ism_break_point *ism_breaks_find(const ism_breaks *b, const 
     return ism_breaks_find_hashed(b, key, ism_cache_mix(key));
 }
 
-/* The first slot probed for the point whose key's ism_cache_mix is `hash` (to prefetch). */
+/* That first slot itself (to prefetch). */
 static inline const ism_break_point *ism_breaks_slot(const ism_breaks *b, uint64_t hash)
 {
-    return &b->slots[hash & b->mask];
+    return &b->slots[ism_breaks_index(b, hash)];
 }
 
-/* Asks the memory for p's slot (a query follows soon). Always inlined: as a plain static
- * inline, GCC 12.2 at -O2 left no prefetch instruction in face_lines.c's lattice_entry nor
- * in breaks.c's fill_block (objdump), and with always_inline lattice_entry has one. What
- * drops it depends on the caller: a small wrapper with one caller kept its prefetch. */
+/* Asks the memory for p's slot (a query follows soon); breaks.c's fill_block calls it (the
+ * cells hash a point once and prefetch ism_breaks_slot themselves). Always inlined: as a
+ * plain static inline, GCC 12.2 at -O2 once left no prefetch instruction in its callers
+ * (objdump); what drops it depends on the caller. */
 static inline __attribute__((always_inline)) void ism_breaks_prefetch(const ism_breaks *b,
                                                                       const int32_t p[3])
 {
-    __builtin_prefetch(&b->slots[ism_cache_mix(ism_lattice_key(p)) & b->mask]);
+    __builtin_prefetch(ism_breaks_slot(b, ism_cache_mix(ism_lattice_key(p))));
 }
 
 #endif

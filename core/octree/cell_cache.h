@@ -194,10 +194,17 @@ static inline ism_label_entry *ism_label_slot(ism_label_entry *table, uint64_t k
     return &table[ism_cache_mix(key) & (((uint64_t)1 << ISM_LABEL_MEMO_BITS) - 1)];
 }
 
-/* The slot of lattice point ip in a direct-mapped table of 2^bits point entries. */
+/* The slot of the lattice point whose key's ism_cache_mix is `hash` in a direct-mapped table
+ * of 2^bits point entries. */
+static inline size_t ism_point_hash_index(int bits, uint64_t hash)
+{
+    return (size_t)(hash & (((uint64_t)1 << bits) - 1));
+}
+
+/* The slot of lattice point ip in such a table. */
 static inline size_t ism_point_index(int bits, const int32_t ip[3])
 {
-    return (size_t)(ism_cache_mix(ism_lattice_key(ip)) & (((uint64_t)1 << bits) - 1));
+    return ism_point_hash_index(bits, ism_cache_mix(ism_lattice_key(ip)));
 }
 
 static inline ism_point_entry *ism_point_slot(ism_point_entry *table, int bits,
@@ -212,7 +219,7 @@ static inline const ism_point_entry *ism_point_find_hashed(const ism_point_entry
                                                            int bits, uint64_t key,
                                                            uint64_t hash)
 {
-    const ism_point_entry *e = &table[hash & (((uint64_t)1 << bits) - 1)];
+    const ism_point_entry *e = &table[ism_point_hash_index(bits, hash)];
     return e->key == key ? e : NULL;
 }
 
