@@ -132,20 +132,36 @@ static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip
     return e;
 }
 
-/* Appends a lattice point of the boundary with f and ∇f from its memo entry e (just asked
- * for: the entry is copied before another lookup may take its slot). */
-static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3], const ism_lattice_entry *e,
-                        bool ascending)
+/* Room for one more boundary point: its slot at the end of cx->bp (counted), or NULL when
+ * memory runs out. */
+static inline ism_bpoint *bpoint_reserve(ism_cell_ctx *cx)
 {
     if (!ism_grow((void **)&cx->bp, &cx->cap_bp, cx->nbp + 1, sizeof *cx->bp, 64))
-        return false;
-    ism_bpoint *b = &cx->bp[cx->nbp++];
+        return NULL;
+    return &cx->bp[cx->nbp++];
+}
+
+/* b as lattice point ip of the boundary with f and ∇f from its memo entry e (just asked for:
+ * the entry is copied before another lookup may take its slot). */
+static inline void bpoint_fill(const ism_cell_ctx *cx, ism_bpoint *b, const int32_t ip[3],
+                               const ism_lattice_entry *e, bool ascending)
+{
     memcpy(b->ip, ip, sizeof b->ip);
     b->ascending = ascending;
     ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
     b->f = e->f;
     memcpy(b->g, e->g, sizeof b->g);
     b->gn = e->gn;
+}
+
+/* Appends a lattice point of the boundary (bpoint_fill). */
+static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3], const ism_lattice_entry *e,
+                        bool ascending)
+{
+    ism_bpoint *b = bpoint_reserve(cx);
+    if (!b)
+        return false;
+    bpoint_fill(cx, b, ip, e, ascending);
     return true;
 }
 
@@ -194,9 +210,10 @@ static inline bool side_between(ism_cell_ctx *cx, int along, const tile_corner *
 
 static inline bool push_corner(ism_cell_ctx *cx, const tile_corner *c)
 {
-    if (!ism_grow((void **)&cx->bp, &cx->cap_bp, cx->nbp + 1, sizeof *cx->bp, 64))
+    ism_bpoint *b = bpoint_reserve(cx);
+    if (!b)
         return false;
-    cx->bp[cx->nbp++] = c->b;
+    *b = c->b;
     return true;
 }
 
@@ -217,12 +234,7 @@ static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
         q[u] = cu[k];
         q[v] = cv[k];
         const ism_lattice_entry *e = lattice_entry(cx, q);
-        memcpy(c[k].b.ip, q, sizeof c[k].b.ip);
-        c[k].b.ascending = k < 2; /* sides 0 and 1 run up u and v, 2 and 3 down */
-        ism_grid_point(&cx->tree->grid, (ism_ipt){{q[0], q[1], q[2]}}, c[k].b.p);
-        c[k].b.f = e->f;
-        memcpy(c[k].b.g, e->g, sizeof c[k].b.g);
-        c[k].b.gn = e->gn;
+        bpoint_fill(cx, &c[k].b, q, e, k < 2); /* sides 0 and 1 run up u and v, 2 and 3 down */
         memcpy(c[k].next, e->next, sizeof c[k].next);
     }
     /* the sides' lower corners: 0 (sides 0 and 3), 1 (side 1), 3 (side 2) */

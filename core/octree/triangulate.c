@@ -14,9 +14,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Room for n more vertices in o (false when memory runs out). */
+static inline bool out_reserve(ism_cell_out *o, size_t n)
+{
+    return ism_grow((void **)&o->verts, &o->cap_verts, o->nverts + n, sizeof *o->verts, 256);
+}
+
 bool ism_cell_out_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx)
 {
-    if (!ism_grow((void **)&o->verts, &o->cap_verts, o->nverts + 1, sizeof *o->verts, 256))
+    if (!out_reserve(o, 1))
         return false;
     *idx = (uint32_t)o->nverts;
     o->verts[o->nverts++] = *p;
@@ -27,7 +33,7 @@ bool ism_cell_out_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx)
  * (one capacity check for the polygon). */
 static bool out_polygon(ism_cell_out *o, const ism_fpoint *pts, size_t n, bool flip)
 {
-    if (!ism_grow((void **)&o->verts, &o->cap_verts, o->nverts + n, sizeof *o->verts, 256))
+    if (!out_reserve(o, n))
         return false;
     for (size_t i = 0; i < n; i++)
         o->verts[o->nverts++] = pts[flip ? n - 1 - i : i];
