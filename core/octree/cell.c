@@ -90,7 +90,8 @@ static bool keep_tile(void *ctx, const ism_tile *tile)
 }
 
 /* Is tile t the whole face of a node s lattice steps wide (then its corners are the node's)?
- * A face's tiles are the node's own face or finer leaves' faces (ism_octree_face_tiles). */
+ * A face's tiles are the node's own face or finer leaves' faces (ism_octree_face_tiles never
+ * emits a coarser neighbour's face), so a tile s wide on the node's face is that face. */
 static bool whole_face(const ism_tile *t, int32_t s)
 {
     return t->u1 - t->u0 == s && t->v1 - t->v0 == s;

@@ -165,6 +165,19 @@ static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3], const ism_lattice
     return true;
 }
 
+/* Tile t's four corners, counter-clockwise in (u, v) from (u0, v0): (u0, v0), (u1, v0),
+ * (u1, v1), (u0, v1). */
+static inline void tile_corners(const ism_tile *t, int32_t q[4][3])
+{
+    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
+    for (int k = 0; k < 4; k++) {
+        q[k][t->axis] = t->plane;
+        q[k][u] = cu[k];
+        q[k][v] = cv[k];
+    }
+}
+
 /* A corner of the tile as the walk needs it: its boundary point and its successors on its
  * lattice lines (copied: its memo entry may be taken by a later lookup). */
 typedef struct tile_corner {
@@ -226,15 +239,12 @@ static inline bool push_corner(ism_cell_ctx *cx, const tile_corner *c)
 static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
 {
     int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
-    int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
     tile_corner c[4];
+    int32_t q[4][3];
+    tile_corners(t, q);
     for (int k = 0; k < 4; k++) {
-        int32_t q[3];
-        q[t->axis] = t->plane;
-        q[u] = cu[k];
-        q[v] = cv[k];
-        const ism_lattice_entry *e = lattice_entry(cx, q);
-        bpoint_fill(cx, &c[k].b, q, e, k < 2); /* sides 0 and 1 run up u and v, 2 and 3 down */
+        const ism_lattice_entry *e = lattice_entry(cx, q[k]);
+        bpoint_fill(cx, &c[k].b, q[k], e, k < 2); /* sides 0 and 1 run up u and v, 2 and 3 down */
         memcpy(c[k].next, e->next, sizeof c[k].next);
     }
     /* the sides' lower corners: 0 (sides 0 and 3), 1 (side 1), 3 (side 2) */
@@ -1145,15 +1155,10 @@ void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t, bool corners)
     __builtin_prefetch(memo_slot(cx, hash), 0);
     if (!corners)
         return;
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
-    int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
-    for (int c = 0; c < 4; c++) {
-        int32_t q[3];
-        q[t->axis] = t->plane;
-        q[u] = cu[c];
-        q[v] = cv[c];
-        ism_lattice_prefetch(cx, q);
-    }
+    int32_t q[4][3];
+    tile_corners(t, q);
+    for (int c = 0; c < 4; c++)
+        ism_lattice_prefetch(cx, q[c]);
 }
 
 /* Adds counts c to the thread's counters. */
