@@ -185,11 +185,12 @@ typedef struct tile_corner {
     int32_t next[3];
 } tile_corner;
 
-/* Appends the break points strictly between corner c (coordinate lo along `along`, the
- * side's lower end) and coordinate hi, found ascending through the registry's successors
- * (one memo lookup a point, each pushed as it is found); reversed after when the side is
- * walked downward. False when a point the registry gave is unregistered in the memo (a
- * bug; cx->unregistered is then set), or when memory runs out. */
+/* Appends the break points strictly between corner c, the side's lower end, and coordinate
+ * hi along `along`, found ascending through the registry's successors (one memo lookup a
+ * point, each pushed as it is found); reversed after when the side is walked downward.
+ * False when a point the registry gave is unregistered in the memo (a bug; cx->unregistered
+ * is then set), or when memory runs out. (Corner c itself was checked registered by
+ * tile_boundary.) */
 static bool side_points(ism_cell_ctx *cx, int along, const tile_corner *c, int32_t hi, bool up)
 {
     int32_t q[3] = {c->b.ip[0], c->b.ip[1], c->b.ip[2]};
