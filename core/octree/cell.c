@@ -109,6 +109,8 @@ static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
             return false;
     }
     first[6] = cx->ntiles;
+    if (!cx->ntiles)
+        return true; /* no tile: no corner will be looked up */
     const ism_node *nd = &cx->tree->nodes[node];
     int32_t s = ism_grid_cell_steps(&cx->tree->grid, nd->level);
     for (int k = 0; k < 8; k++) {
