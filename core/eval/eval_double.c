@@ -264,19 +264,40 @@ KERNEL_R(k_square, a[j] * a[j])
 KERNEL_R(k_abs, fabs(a[j]))
 KERNEL_RC(k_powc, ism_powc(a[j], c))
 KERNEL_R(k_sqrt, ism_sqrt_clip(a[j]))
-/* sin or cos (sine: true) of a group: the register's pair, computed once for its SIN and its
- * COS steps (trig_pair.h's group pairs, four lanes at a time by sincos.h's own pair: the bits
- * ism_eval_point's memo holds) */
+/* sin or cos (sine: true) of a group, four lanes at a time by sincos.h's own pair: the bits
+ * ism_eval_point's memo holds */
+static inline __attribute__((always_inline)) void k_sincos(double *restrict o,
+                                                           const double *restrict a, bool sine)
+{
+    _Pragma("GCC unroll 8")
+    for (size_t j = 0; j < LANES; j += 4) {
+        v4d s, c;
+        ism_sincos4(v4_ld(a + j), &s, &c);
+        v4_st(o + j, sine ? s : c);
+    }
+}
+/* sin or cos (sine: true) of a chunk's ngroups groups, each lane k_sincos's. A chunk of one
+ * group (sheet_cells.c's 27 points) takes its register's pair once for the SIN and the COS
+ * steps (trig_pair.h's group pairs: the gyroid's three trig registers fit the
+ * ISM_TRIG_GROUP_PAIRS kept). A longer chunk computes every group directly: its registers'
+ * groups outnumber the pairs (the gyroid's three registers of two groups are six), so the
+ * round robin evicts each pair before its second step, and each miss stores and copies on top
+ * of the same sincos4 (revL 1: the gyroid tape at n = 96, 128, 256 cost ~5% more with pairs). */
 _Static_assert(LANES == ISM_TRIG_GROUP_LANES, "a group pair holds a whole group");
 static inline __attribute__((always_inline)) void k_trig(double *restrict o,
                                                          const double *restrict a, bool sine,
-                                                         ism_trig_cache *trig)
+                                                         ism_trig_cache *trig, size_t ngroups)
 {
-    const ism_trig_group_pair *p = ism_trig_groups(trig, a, LANES / 4);
-    const double *v = sine ? p->s : p->c;
-    _Pragma("GCC unroll 8")
-    for (size_t j = 0; j < LANES; j += 4)
-        v4_st(o + j, v4_ld(v + j));
+    if (ngroups == 1) {
+        const ism_trig_group_pair *p = ism_trig_groups(trig, a, LANES / 4);
+        const double *v = sine ? p->s : p->c;
+        _Pragma("GCC unroll 8")
+        for (size_t j = 0; j < LANES; j += 4)
+            v4_st(o + j, v4_ld(v + j));
+        return;
+    }
+    for (size_t g = 0; g < ngroups; g++)
+        k_sincos(o + g * LANES, a + g * LANES, sine);
 }
 KERNEL_R(k_tan, tan(a[j]))
 KERNEL_R(k_exp, exp(a[j]))
@@ -324,11 +345,8 @@ static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, 
     case ISM_OP_POWI: powi_lanes(out, ra, in->b, ngroups); break;
     case ISM_OP_POWC: RUN_RC(k_powc); break;
     case ISM_OP_SQRT: RUN_R(k_sqrt); break;
-    case ISM_OP_SIN:
-    case ISM_OP_COS:
-        for (size_t g = 0; g < ngroups; g++)
-            k_trig(out + g * LANES, ra + g * LANES, in->op == ISM_OP_SIN, trig);
-        break;
+    case ISM_OP_SIN: k_trig(out, ra, true, trig, ngroups); break; /* sine a constant: no */
+    case ISM_OP_COS: k_trig(out, ra, false, trig, ngroups); break; /* choice in the lanes */
     case ISM_OP_TAN: RUN_R(k_tan); break;
     case ISM_OP_EXP: RUN_R(k_exp); break;
     case ISM_OP_LOG: RUN_R(k_log); break;

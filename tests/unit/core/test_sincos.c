@@ -5,7 +5,7 @@
  * four lanes bit for bit; libm's bits past the range and for non-finite arguments; and every
  * point evaluator (one point, batch, gradient, batched gradient, Hessian) of a trig surface
  * giving the same f bit for bit; the batched gradient's kept pairs serving only their own
- * arguments. */
+ * arguments, and ism_eval_batch's sharing them on one workspace (one-group chunks only). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
@@ -224,6 +224,83 @@ Test(sincos, kept_group_pairs_serve_only_their_own_arguments)
     unsigned next = ws->trig->next_pair;
     ism_eval_gradient_batch(t, ws, x, y, z, f, g, N);
     cr_assert_eq(ws->trig->next_pair, next, "a repeated batch computed its pairs again");
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
+
+/* ism_eval_batch and the batched gradient share the workspace's group pairs: batches of both,
+ * interleaved on one workspace, of lengths 27, 32, 96 and 256 (one group, and chunks of three
+ * and eight), with one lane one ulp off the last batch (lane 0 among them: its bits are the
+ * pairs' first test), each give every lane ism_eval_point's f (and ism_eval_gradient's
+ * gradient) bit for bit. Then that the pairs are served where they fit, and only there: a
+ * chunk of one group repeated takes no new pair (a miss advances the round robin), and a
+ * chunk of more than one group takes none at all (revL 1: its groups outnumber the pairs,
+ * which the gyroid's eight groups a register evicted before their second step). */
+Test(sincos, eval_batch_and_the_batched_gradient_share_the_pairs_exactly)
+{
+    const test_surface *gs = test_surface_named("gyroid-ball");
+    ism_tape *t = test_surface_compile(gs);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    enum { N = ISM_EVAL_BATCH };
+    static const size_t lens[] = {27, 32, 96, 256};
+    static const int lanes[] = {0, 5, 31, 0, 64, 200, 0, 33};
+    test_rng r = {11};
+    double x[N], y[N], z[N], f[N], g[N][3];
+    for (int i = 0; i < N; i++) {
+        x[i] = test_uniform(&r, gs->box[0], gs->box[3]);
+        y[i] = test_uniform(&r, gs->box[1], gs->box[4]);
+        z[i] = test_uniform(&r, gs->box[2], gs->box[5]);
+    }
+    for (int round = 0; round < 48; round++) {
+        size_t n = lens[round % 4];
+        size_t lane = (size_t)lanes[(round / 4) % 8] % n;
+        double *c = round % 3 == 0 ? x : round % 3 == 1 ? y : z;
+        if (round % 5 != 4) /* one round in five repeats the last batch's arguments */
+            c[lane] = nextafter(c[lane], round % 2 ? INFINITY : -INFINITY);
+        bool grad = (round / 2) % 2 == 1;
+        if (grad) {
+            for (size_t i0 = 0; i0 < n; i0 += ISM_GRAD_BATCH) {
+                size_t m = n - i0 < ISM_GRAD_BATCH ? n - i0 : ISM_GRAD_BATCH;
+                ism_eval_gradient_batch(t, ws, x + i0, y + i0, z + i0, f + i0, g + i0, m);
+            }
+        } else {
+            ism_eval_batch(t, ws, x, y, z, f, n);
+        }
+        for (size_t i = 0; i < n; i++) {
+            double one = ism_eval_point(t, ws, x[i], y[i], z[i]), gr[3];
+            cr_assert(memcmp(&one, &f[i], sizeof one) == 0, "round %d (%s, n %zu) lane %zu: "
+                      "f %.17g vs one point's %.17g", round, grad ? "gradient" : "batch", n, i,
+                      f[i], one);
+            if (grad) {
+                ism_eval_gradient(t, ws, x[i], y[i], z[i], gr);
+                cr_assert(memcmp(gr, g[i], sizeof gr) == 0, "round %d lane %zu: gradient",
+                          round, i);
+            }
+        }
+    }
+    /* served where they fit: 27 points again take no new pair ... */
+    ism_eval_batch(t, ws, x, y, z, f, 27);
+    unsigned next = ws->trig->next_pair;
+    ism_eval_batch(t, ws, x, y, z, f, 27);
+    cr_assert_eq(ws->trig->next_pair, next, "a repeated one-group chunk computed its pairs");
+    /* ... and new arguments take one a trig register (the gyroid ball's three) */
+    for (int i = 0; i < 27; i++)
+        x[i] += 0.25, y[i] += 0.25, z[i] += 0.25;
+    ism_eval_batch(t, ws, x, y, z, f, 27);
+    cr_assert_eq(ws->trig->next_pair, (next + 3) % ISM_TRIG_GROUP_PAIRS);
+    /* longer chunks take none, new arguments or not: no pair is written */
+    static ism_trig_group_pair held[ISM_TRIG_GROUP_PAIRS];
+    memcpy(held, ws->trig->pairs, sizeof held);
+    next = ws->trig->next_pair;
+    static const size_t longer[] = {33, 96, 256};
+    for (size_t k = 0; k < 3; k++) {
+        for (int i = 0; i < N; i++)
+            x[i] -= 0.125;
+        ism_eval_batch(t, ws, x, y, z, f, longer[k]);
+        cr_assert(ws->trig->next_pair == next &&
+                  memcmp(held, ws->trig->pairs, sizeof held) == 0,
+                  "n %zu: a chunk of more than one group took pairs it cannot keep", longer[k]);
+    }
     ism_eval_ws_free(ws);
     ism_tape_free(t);
 }
