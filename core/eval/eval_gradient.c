@@ -85,11 +85,10 @@ INLINE v4d splat(double c)
 }
 
 /* out = g(a) with g' = g1: the chain rule, +0 where g1 is 0 (even when ∇a is not finite), as
- * a mask on the product (no branch: the same bits as choosing splat(0.0) there). */
+ * a mask on the product (lanes4.h's v4_chain, the batched gradient's rule). */
 INLINE void dual_chain(ism_dual *out, double g, double g1, const ism_dual *a)
 {
-    v4d s = splat(g1);
-    v4d d = (v4d)((v4i)(s * dld(a)) & (v4i)(s != 0.0));
+    v4d d = v4_chain(splat(g1), dld(a));
     d[0] = g;
     dst(out, d);
 }

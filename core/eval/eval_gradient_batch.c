@@ -31,12 +31,6 @@ static inline double *comp(double *regs, uint32_t r, int k)
 /* VL lanes as one value of GCC's vector extension (lanes4.h). */
 _Static_assert(sizeof(v4d) == VL * sizeof(double), "a group is one v4d");
 
-/* c where m is set, else +0.0: the chain rule's "0 where g' is 0" as a mask */
-INLINE v4d keep(v4d c, v4i m)
-{
-    return (v4d)((v4i)c & m);
-}
-
 INLINE void k_add(double *o, const double *a, const double *b)
 {
     v4_st(o, v4_ld(a) + v4_ld(b));
@@ -79,17 +73,15 @@ INLINE void k_pick(double *o, const double *av, const double *bv, const double *
     v4_st(o, v4_pick(m, v4_ld(ak), v4_ld(bk)));
 }
 
-/* the chain rule's partial g' a': 0 where g' is 0 (even where a' is not finite) */
+/* the chain rule's partial g' a' (lanes4.h's v4_chain: 0 where g' is 0) */
 INLINE void k_chain(double *o, const double *g1, const double *a)
 {
-    v4d g = v4_ld(g1);
-    v4_st(o, keep(g * v4_ld(a), (v4i)(g != 0.0)));
+    v4_st(o, v4_chain(v4_ld(g1), v4_ld(a)));
 }
 
 INLINE void k_chain_c(double *o, double g1, const double *a)
 {
-    v4d g = {g1, g1, g1, g1};
-    v4_st(o, keep(g * v4_ld(a), (v4i)(g != 0.0)));
+    v4_st(o, v4_chain((v4d){g1, g1, g1, g1}, v4_ld(a)));
 }
 
 INLINE void k_fill(double *o, double c)
@@ -226,7 +218,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         for (size_t g = 0; g < ng; g++) {
             v4d a = v4_ld(av + g * VL);
             v4_st(ov + g * VL, (v4d)((v4i)a & ~sign));
-            v4_st(g1 + g * VL, v4_pick((v4i)(a < zero), -one, keep(one, (v4i)(a > zero))));
+            v4_st(g1 + g * VL, v4_pick((v4i)(a < zero), -one, v4_keep(one, (v4i)(a > zero))));
         }
         break;
     }

@@ -38,4 +38,19 @@ INLINE v4d v4_pick(v4i m, v4d a, v4d b)
     return (v4d)(((v4i)a & m) | ((v4i)b & ~m));
 }
 
+/* c where m is set, else +0.0 (all-zero bits) */
+INLINE v4d v4_keep(v4d c, v4i m)
+{
+    return (v4d)((v4i)c & m);
+}
+
+/* The chain rule's partial g' a', +0 where g' is 0 (±0) even where a' is not finite: the one
+ * rule of the gradient evaluators, one point (eval_gradient.c's dual_chain) and batched
+ * (eval_gradient_batch.c's k_chain), which must agree bit for bit. A NaN g' passes through
+ * (NaN != 0). */
+INLINE v4d v4_chain(v4d g1, v4d a)
+{
+    return v4_keep(g1 * a, (v4i)(g1 != 0.0));
+}
+
 #endif
