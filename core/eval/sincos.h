@@ -50,15 +50,16 @@
 #include <math.h>
 #include <stdint.h>
 
-/* |x| up to which the reduction above is exact: |j| <= 2^17 128/pi < 2^(17 + 6) keeps j Q1,
- * j Q2 and j Q3 exact doubles (j's bits + Q's SC_SPLIT_BITS <= 53, asserted). Beyond (or NaN,
+/* |x| up to which the reduction above is exact: |j| <= 2^17 128/pi < 2^(17 + SC_128_PI_BITS)
+ * (128/pi < 2^6: the generated SC_128_PI_BITS, log2 of SC_128_PI rounded up) keeps j Q1, j Q2
+ * and j Q3 exact doubles (j's bits + Q's SC_SPLIT_BITS <= 53, asserted). Beyond (or NaN,
  * ±inf): libm. Tapes see far smaller arguments (a box of a few units times a period's
  * scale). SC_Q1 .. SC_Q4 (pi/128 = Q1 + Q2 + Q3 + Q4 - 2.7e-46), SC_128_PI and the
  * polynomials' SC_S1 .. SC_S3, SC_C1, SC_C2: sincos_table.h (generated). */
 #define ISM_SINCOS_LIMIT_BITS 17
 #define ISM_SINCOS_LIMIT ((double)(1ull << ISM_SINCOS_LIMIT_BITS))
-_Static_assert(ISM_SINCOS_LIMIT_BITS + 6 + SC_SPLIT_BITS <= 53,
-               "j = x 128/pi (128/pi < 2^6) times a Q is exact up to ISM_SINCOS_LIMIT");
+_Static_assert(ISM_SINCOS_LIMIT_BITS + SC_128_PI_BITS + SC_SPLIT_BITS <= 53,
+               "j = x 128/pi times a Q is exact up to ISM_SINCOS_LIMIT");
 /* 1.5 2^52: v + it, for |v| < 2^51, rounds v to an integer held in the sum's low bits */
 #define SC_ROUND 0x1.8p52
 

@@ -15,13 +15,14 @@ with mpmath alone (no libm value is used):
 
 Run from the repository's root: python3 tests/unit/core/sincos_coeffs.py [--write]
 (prints what it derives; --write rewrites core/eval/sincos_table.h: the constants as #defines,
-SC_SPLIT_BITS among them, and the table — sincos.h holds no copy of either)."""
+SC_SPLIT_BITS and SC_128_PI_BITS among them, and the table — sincos.h holds no copy of either)."""
 import sys
 
 import mpmath as mp
 
 mp.mp.dps = 80
-SPLIT_BITS = 30     # |j| < 2^23 keeps j Q1, j Q2, j Q3 exact (23 + 30 <= 53)
+SPLIT_BITS = 30     # j Q1, j Q2, j Q3 exact for 53 - SPLIT_BITS bits of j; sincos.h asserts its
+                    # ISM_SINCOS_LIMIT_BITS + SC_128_PI_BITS fit them
 N = 256             # table entries over a whole turn
 R = mp.pi / N       # |r| <= pi/256 (plus a rounding's margin)
 
@@ -54,6 +55,10 @@ def constants():
     for i, p in enumerate(parts):
         lines.append("#define SC_Q%d %s /* %s */" % (i + 1, float(p).hex(), mp.nstr(p, 22)))
     lines.append("#define SC_128_PI %s" % float(128 / mp.pi).hex())
+    # j = x 128/pi: |x| < 2^k gives |j| < 2^(k + SC_128_PI_BITS)
+    bits = int(mp.ceil(mp.log(128 / mp.pi, 2)))
+    lines.append("#define SC_128_PI_BITS %d /* 128/pi = %s < 2^%d */" % (
+        bits, mp.nstr(128 / mp.pi, 6), bits))
     # Taylor coefficients, and what the dropped terms weigh at |r| = pi/256 (relative)
     r = R * mp.mpf("1.001")
     for name, c in (("S1", -mp.mpf(1) / 6), ("S2", mp.mpf(1) / 120), ("S3", -mp.mpf(1) / 5040),
