@@ -13,9 +13,14 @@ with mpmath alone (no libm value is used):
   - the polynomials of sin r and cos r on |r| <= pi/256 (Taylor: their truncation error there,
     printed below, is far under a double's rounding).
 
-Run from the repository's root: python3 tests/unit/core/sincos_coeffs.py [--write]
-(prints what it derives; --write rewrites core/eval/sincos_table.h: the constants as #defines,
-SC_SPLIT_BITS and SC_128_PI_BITS among them, and the table — sincos.h holds no copy of either)."""
+python3 tests/unit/core/sincos_coeffs.py [--write | --check] (from any directory)
+prints what it derives; --write rewrites core/eval/sincos_table.h: the constants as #defines,
+SC_SPLIT_BITS and SC_128_PI_BITS among them, and the table — sincos.h holds no copy of either;
+--check writes nothing and exits 1, showing the difference, when the file is not what --write
+would write (a hand edit, or a change here not followed by --write): unit_proto's
+generated_files/sincos_table_is_its_generators_output runs it."""
+import difflib
+import os
 import sys
 
 import mpmath as mp
@@ -70,9 +75,14 @@ def constants():
     return lines
 
 
+TABLE_PATH = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "..", "..",
+                          "core", "eval", "sincos_table.h")
+
+
 def main():
     consts = constants()
-    print("\n".join(consts))
+    if "--check" not in sys.argv:
+        print("\n".join(consts))
     rows = []
     for i in range(N):
         a = 2 * mp.pi * i / N
@@ -83,11 +93,21 @@ def main():
         gs, gc = mp.nint(s), mp.nint(c)
         row = (sh, sl, ch, cl, float(gs), float(s - gs), float(gc), float(c - gc))
         rows.append("    {" + ", ".join(v.hex() for v in row) + "},")
+    text = (TABLE_HEAD + "\n".join(consts) + "\n\n" + TABLE_ROWS + "\n".join(rows)
+            + "\n};\n\n#endif\n")
     if "--write" in sys.argv:
-        with open("core/eval/sincos_table.h", "w") as f:
-            f.write(TABLE_HEAD + "\n".join(consts) + "\n\n" + TABLE_ROWS + "\n".join(rows)
-                    + "\n};\n\n#endif\n")
+        with open(TABLE_PATH, "w") as f:
+            f.write(text)
         print("wrote core/eval/sincos_table.h")
+    elif "--check" in sys.argv:
+        with open(TABLE_PATH) as f:
+            held = f.read()
+        if held != text:
+            sys.stdout.writelines(difflib.unified_diff(
+                held.splitlines(True), text.splitlines(True),
+                "core/eval/sincos_table.h", "sincos_coeffs.py --write"))
+            sys.exit(1)
+        print("core/eval/sincos_table.h is what --write writes")
 
 
 TABLE_HEAD = """/* sincos_table.h — sincos.h's constants: the split of pi/128 (Cody & Waite), 128/pi and the
