@@ -3,7 +3,9 @@
  * needs the other; ism_sincos (sincos.h, our own, not libm's) gives both at once. A memo of
  * arguments, kept by the workspace, hands out the second of the pair and repeats. It is
  * keyed on the argument's bits, so a hit is exactly what a fresh call would return, and what
- * the batched evaluators' ism_sincos4 computes four lanes at a time. Not public. */
+ * the batched evaluators' ism_sincos4 computes four lanes at a time. Also the group pairs
+ * (ism_trig_groups): whole registers' sines and cosines for the batched gradient and for
+ * ism_eval_batch's one-group chunks. Not public. */
 #ifndef ISM_TRIG_PAIR_H
 #define ISM_TRIG_PAIR_H
 
@@ -42,13 +44,14 @@ typedef struct ism_trig_entry {
     double s, c;
 } ism_trig_entry;
 
-/* The batched evaluators' last sines and cosines of whole registers (eval_gradient_batch.c,
- * eval_double.c's ism_eval_batch), kept by their arguments' bits: a surface takes sin u and
- * cos u of one register at different steps (the gyroid: sin and cos of kx, ky and kz, six
- * steps on three registers), and a register's pair is computed once. ISM_TRIG_GROUP_PAIRS
- * registers: the gyroid's three, and one more (a power of two: the round robin's index is
- * masked). ISM_TRIG_GROUP_LANES: ISM_GRAD_BATCH's and a group of ism_eval_batch's (asserted
- * there). Gyroid ball at E = 1e-3 (callgrind, as above): the whole run 2,741.8M instructions
+/* The batched evaluators' last sines and cosines of whole registers (eval_gradient_batch.c;
+ * eval_double.c's ism_eval_batch for a chunk of one group only: a longer chunk's registers
+ * span several groups, more than the pairs hold), kept by their arguments' bits: a surface
+ * takes sin u and cos u of one register at different steps (the gyroid: sin and cos of kx, ky
+ * and kz, six steps on three registers), and a register's pair is computed once.
+ * ISM_TRIG_GROUP_PAIRS registers: the gyroid's three, and one more (a power of two: the round
+ * robin's index is masked). ISM_TRIG_GROUP_LANES: ISM_GRAD_BATCH's and a group of
+ * ism_eval_batch's (asserted there). Gyroid ball at E = 1e-3 (callgrind, as above): the whole run 2,741.8M instructions
  * without them, ~2,703M with. */
 #define ISM_TRIG_GROUP_PAIRS 4
 #define ISM_TRIG_GROUP_LANES 32
