@@ -508,6 +508,15 @@ bool cf_conform_point(cf_run *r, size_t i);
  * edges. False only when out of memory (the mesh is then as before). */
 bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n);
 
+/* Whether q lies farther than r from every curve of a tube, by the corners of a triangle:
+ * vd[k] is corner k's distance to the nearest curve (not finite: nothing within r + reach,
+ * or outside the curves' box grown by that, so r + reach is a lower bound), and a curve
+ * point is at least vd[k] − |q − corner k| from q (the triangle inequality). The bound must
+ * exceed r by more than the rounding of the distances (CF_QUERY_SLACK). tri_in_tube asks no
+ * polyline query of such a point: none could answer within r. */
+bool cf_far_by_corners(const double q[3], const double *const corner[3], const double vd[3],
+                       double r, double reach);
+
 /* ---- conform_kept.c: curves the polygoniser's mesh already follows ---- */
 /* True when the live mesh holds each of the n open polylines pl (of curves cu, no end at a
  * pinch point) as a chain of edges from its first point to its last, each edge with two

@@ -63,6 +63,17 @@ static double vertex_distance(const cf_ctx *c, const tube *tb, uint32_t v, uint3
     return d;
 }
 
+bool cf_far_by_corners(const double q[3], const double *const corner[3], const double vd[3],
+                       double r, double reach)
+{
+    double lb = 0, mag = cf_max2(fabs(q[0]), cf_max2(fabs(q[1]), fabs(q[2])));
+    for (int k = 0; k < 3; k++) {
+        double dk = isfinite(vd[k]) ? vd[k] : r + reach;
+        lb = cf_max2(lb, dk - ism_dist3(q, corner[k]));
+    }
+    return lb > r + CF_QUERY_SLACK * (lb + mag);
+}
+
 static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
 {
     tube *tb = arg;
@@ -84,7 +95,8 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
      * has one of them within half its longest edge of the curve. The corners are known to be
      * farther than r from every curve (vd is the nearest curve's distance, or beyond the
      * tube's box grown by r + reach when not finite; a query within r would find the same
-     * nearest segment), so only the other four are asked. */
+     * nearest segment), so only the other four are asked, those the corners' bound
+     * (cf_far_by_corners) leaves. */
     double q[4][3];
     for (int k = 0; k < 3; k++) {
         q[0][k] = (a[k] + b[k]) / 2;
@@ -92,20 +104,10 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
         q[2][k] = (d[k] + a[k]) / 2;
         q[3][k] = (a[k] + b[k] + d[k]) / 3;
     }
-    /* A point farther from every curve than r by its corners' distances (a corner's, less
-     * how far the point lies from it; a corner with nothing within r + reach, or outside the
-     * curves' box grown by that, counts r + reach) asks nothing: no query of it could answer
-     * within r. The bound is grown by more than the rounding of the distances. */
     const double *corner[3] = {a, b, d};
     bool ask[4];
-    for (int j = 0; j < 4; j++) {
-        double lb = 0, mag = cf_max2(fabs(q[j][0]), cf_max2(fabs(q[j][1]), fabs(q[j][2])));
-        for (int k = 0; k < 3; k++) {
-            double dk = isfinite(vd[k]) ? vd[k] : tb->r + tb->reach;
-            lb = cf_max2(lb, dk - ism_dist3(q[j], corner[k]));
-        }
-        ask[j] = !(lb > tb->r + CF_QUERY_SLACK * (lb + mag));
-    }
+    for (int j = 0; j < 4; j++)
+        ask[j] = !cf_far_by_corners(q[j], corner, vd, tb->r, tb->reach);
     /* near the rim of the cut only: the curves nearest its corners (all of them when a
      * corner is beyond the memo's reach, a triangle longer than reach) */
     bool all = !(isfinite(vd[0]) && isfinite(vd[1]) && isfinite(vd[2]));

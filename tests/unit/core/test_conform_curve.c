@@ -5,12 +5,17 @@
  * grid one cell thick, as for Steiner's axes) and a random walk, at queries near the curve,
  * far from it, outside its grid and on it, with small and large reaches. The distance must be
  * the minimum over all segments, INFINITY exactly when that exceeds the reach, and the foot
- * and arclength parameter must name a point of the polyline at that distance. */
+ * and arclength parameter must name a point of the polyline at that distance.
+ * The tube's corner bound (cf_far_by_corners, conform_tube.c), which spares a triangle's
+ * midpoints and centroid their queries, is checked against the same brute force: a point it
+ * calls farther than r must be so, also where every corner is beyond r and a midpoint within
+ * it (a triangle straddling the curve), in the three placements. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
 
 #include "core/singular/conform_internal.h"
+#include "tests/unit/placements.h"
 
 #define NPTS 400
 #define NQUERY 3000
@@ -146,4 +151,89 @@ Test(conform_curve, axis_and_random_walk)
         for (int k = 0; k < 3; k++)
             p[3 * i + k] = p[3 * (i - 1) + k] + 0.02 * (urand() - 0.5);
     check_queries(p, NPTS, false, 0.01);
+}
+
+/* The points tri_in_tube may spare (the edge midpoints and the centroid) of the triangle c,
+ * with its corners' distances as vertex_distance gives them (not finite beyond r + reach):
+ * each one cf_far_by_corners calls far must be farther than r by the brute force. Returns
+ * how many it called far; *straddles counts those within r while every corner is beyond. */
+static int check_far(const double *p, size_t n, const double c[3][3], double r, double reach,
+                     int *straddles)
+{
+    double vd[3], s;
+    bool corners_out = true;
+    for (int k = 0; k < 3; k++) {
+        vd[k] = brute(p, n, false, c[k], &s);
+        corners_out = corners_out && vd[k] > r;
+        if (vd[k] > r + reach)
+            vd[k] = INFINITY;
+    }
+    double q[4][3];
+    for (int k = 0; k < 3; k++) {
+        q[0][k] = (c[0][k] + c[1][k]) / 2;
+        q[1][k] = (c[1][k] + c[2][k]) / 2;
+        q[2][k] = (c[2][k] + c[0][k]) / 2;
+        q[3][k] = (c[0][k] + c[1][k] + c[2][k]) / 3;
+    }
+    const double *corner[3] = {c[0], c[1], c[2]};
+    int far = 0;
+    for (int j = 0; j < 4; j++) {
+        double d = brute(p, n, false, q[j], &s);
+        *straddles += corners_out && d <= r;
+        if (!cf_far_by_corners(q[j], corner, vd, r, reach))
+            continue;
+        far++;
+        cr_assert(d > r, "point %d called farther than r %g, but %.17g from the curve", j, r, d);
+    }
+    return far;
+}
+
+Test(conform_curve, far_by_corners)
+{
+    enum { NP = 60, NTRI = 4000 };
+    const double cell = 0.02, r = 2.5 * cell; /* a tube of CF_RHO_CELLS cells */
+    const double shift[3][3] = {{0, 0, 0},
+                                {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
+                                {PF_IRR_X * cell, PF_IRR_Y * cell, PF_IRR_Z * cell}};
+    for (int sh = 0; sh < 3; sh++) {
+        const double *o = shift[sh];
+        /* a straight curve along x: corners 1.05 r, 1.049 r and 1.123 r from it; the midpoints
+         * of the first two edges 0.668 r and 0.832 r, the centroid 0.793 r, the third
+         * midpoint 1.069 r (closed forms: the distance to the x axis is sqrt(y^2 + z^2)) */
+        double p[3 * NP];
+        for (int i = 0; i < NP; i++) {
+            p[3 * i] = o[0] - 1 + 2.0 * i / (NP - 1);
+            p[3 * i + 1] = o[1];
+            p[3 * i + 2] = o[2];
+        }
+        const double c[3][3] = {{o[0], o[1] + 1.05 * r, o[2]},
+                                {o[0] + 0.3 * r, o[1] - 0.2 * r, o[2] + 1.03 * r},
+                                {o[0] - 0.3 * r, o[1] + 1.05 * r, o[2] + 0.4 * r}};
+        int straddles = 0;
+        check_far(p, NP, c, r, r, &straddles);
+        cr_assert_eq(straddles, 3, "shift %d: the points within r", sh);
+        /* a helix, triangles of sides up to 4 r round points near it: both answers occur,
+         * and straddling triangles among them */
+        srand(13 + sh);
+        for (int i = 0; i < NP; i++) {
+            double a = 2 * M_PI * i / NP;
+            p[3 * i] = o[0] + 0.4 * cos(a);
+            p[3 * i + 1] = o[1] + 0.4 * sin(a);
+            p[3 * i + 2] = o[2] + 0.5 * i / NP;
+        }
+        int far = 0;
+        straddles = 0;
+        for (int t = 0; t < NTRI; t++) {
+            size_t i = (size_t)rand() % (NP - 1);
+            double centre[3], tri[3][3];
+            for (int k = 0; k < 3; k++)
+                centre[k] = p[3 * i + k] + 3 * r * (urand() - 0.5);
+            for (int v = 0; v < 3; v++)
+                for (int k = 0; k < 3; k++)
+                    tri[v][k] = centre[k] + 2 * r * (urand() - 0.5);
+            far += check_far(p, NP, tri, r, t % 2 ? r : 0.5 * r, &straddles);
+        }
+        cr_assert(far > NTRI / 4 && far < 3 * NTRI, "shift %d: %d points called far", sh, far);
+        cr_assert(straddles > 20, "shift %d: %d straddling points", sh, straddles);
+    }
 }
