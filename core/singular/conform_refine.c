@@ -499,36 +499,23 @@ static bool split_edge(cf_ctx *c, uint32_t a, uint32_t b, cf_tris *removed, bool
  * the refill, most of them midpoints met twice). */
 typedef struct edge_memo {
     ism_key_map map;
-    double *d;      /* by the map's index */
+    double *d;        /* by the map's index */
     double (*pre)[4]; /* by the map's index: f and ∇f at the midpoint, taken ahead (prefetch) */
-    uint8_t *state; /* by the map's index: MID_* */
-    size_t cap;
+    uint8_t *state;   /* by the map's index: MID_*, set when the index is added */
+    size_t cap_d, cap_pre, cap_state;
 } edge_memo;
 
-/* An edge's midpoint in a round: its first evaluation taken ahead, or measured (d). */
-enum { MID_NONE = 0, MID_PREFETCHED = 1, MID_MEASURED = 2 };
+/* An edge's midpoint in a round: its first evaluation taken ahead, or measured (d). Neither is
+ * 0, the value of room never used (cf_grow zeroes it); an index reused in a later round (the
+ * map starts again each round) is set again when added. */
+enum { MID_PREFETCHED = 1, MID_MEASURED = 2 };
 
-/* Room for n midpoints (false when out of memory: nothing lost, the arrays as they were). */
+/* Room for n midpoints (false when out of memory: nothing lost, what was kept stays). */
 static bool edge_memo_room(edge_memo *m, size_t n)
 {
-    if (n <= m->cap)
-        return true;
-    size_t cap = m->cap ? 2 * m->cap : 256;
-    while (cap < n)
-        cap *= 2;
-    double *d = realloc(m->d, cap * sizeof *d);
-    if (d)
-        m->d = d;
-    double (*pre)[4] = d ? realloc(m->pre, cap * sizeof *pre) : NULL;
-    if (pre)
-        m->pre = pre;
-    uint8_t *state = pre ? realloc(m->state, cap) : NULL;
-    if (state)
-        m->state = state;
-    if (!state)
-        return false;
-    m->cap = cap;
-    return true;
+    return cf_grow((void **)&m->d, &m->cap_d, n, sizeof *m->d) &&
+           cf_grow((void **)&m->pre, &m->cap_pre, n, sizeof *m->pre) &&
+           cf_grow((void **)&m->state, &m->cap_state, n, sizeof *m->state);
 }
 
 static void edge_memo_reset(edge_memo *m)
@@ -581,13 +568,14 @@ static double edge_measure(cf_ctx *c, edge_memo *m, uint32_t a, uint32_t b, cons
  * gradient batch: up to 4 points each, ISM_GRAD_BATCH lanes a pass. */
 #define PREFETCH_TRIS 16
 
-/* f and ∇f at the centroids of triangles [a, a + n) of a round (taken ahead; has: live). */
-typedef struct centre_pre {
+/* What prefetch took ahead for triangles [a, a + n) of a round (has: live): f and ∇f at
+ * their centroids, and the edge memo's indices of their edges' midpoints. */
+typedef struct tris_pre {
     size_t a, n;
     bool has[PREFETCH_TRIS];
     double fg[PREFETCH_TRIS][4];
     uint32_t edge[PREFETCH_TRIS][3]; /* the edges' memo indices (ISM_KEY_NONE: not added) */
-} centre_pre;
+} tris_pre;
 
 /* The corners' points of a live triangle t, its centroid q[0] and edge midpoints q[1 + j]
  * (edge v[j] → v[j + 1]), as split_over measures them. */
@@ -610,7 +598,7 @@ static void tri_points(const cf_ctx *c, size_t t, double q[4][3])
  * the memo has no room for, is left: edge_measure evaluates it as before). A triangle found
  * over E at its centroid leaves its midpoints unasked: their lanes are wasted, nothing more
  * (Klein bottle at E 0.00327: 82,200 measures, none beyond its first evaluation). */
-static void prefetch(cf_ctx *c, edge_memo *m, size_t a, size_t b, centre_pre *cp)
+static void prefetch(cf_ctx *c, edge_memo *m, size_t a, size_t b, tris_pre *cp)
 {
     double x[4 * PREFETCH_TRIS], y[4 * PREFETCH_TRIS], z[4 * PREFETCH_TRIS];
     double f[4 * PREFETCH_TRIS], g[4 * PREFETCH_TRIS][3];
@@ -676,7 +664,7 @@ static bool split_over(cf_ctx *c, size_t nt0, double E, double min_edge, cf_tris
         centroids_room(cm, hi);
         /* a triangle measured within E stays so (a split only replaces the two triangles
          * on its edge, by halves appended): each round measures the halves of the last */
-        centre_pre cp = {.a = lo, .n = 0};
+        tris_pre cp = {.a = lo, .n = 0};
         for (size_t t = lo; ok && t < hi && !cf_poll(c, 4); t++) {
             if (t == cp.a + cp.n) /* the next triangles' points, ahead */
                 prefetch(c, &memo, t, hi - t < PREFETCH_TRIS ? hi : t + PREFETCH_TRIS, &cp);
