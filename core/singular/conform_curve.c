@@ -203,28 +203,28 @@ static inline __attribute__((always_inline)) double seg_dist2(const cf_polyline 
     return e;
 }
 
-/* Whether cell c's segments may hold one nearer to q than best (a squared distance): its
- * box is no farther, by more than the rounding of the distances, than sqrt(best). */
-static inline __attribute__((always_inline)) bool cell_may_hold(const cf_polyline *pl, size_t c, const double q[3], double best,
-                          double mag)
-{
-    if (pl->g_start[c] == pl->g_start[c + 1])
-        return false;
-    if (!(best < INFINITY))
-        return true;
-    const double *b = pl->g_box[pl->g_start[c]];
-    double d2 = ism_sqdist_box3(q, b, b + 3);
-    double r = sqrt(best);
-    r += CF_QUERY_SLACK * (r + mag);
-    return d2 <= r * r;
-}
-
 /* An upper bound of sqrt(best), a squared distance, grown by more than the rounding of the
  * distances (INFINITY for INFINITY). */
 static inline double near_bound(double best, double mag)
 {
     double r = sqrt(best);
     return r + CF_QUERY_SLACK * (r + mag);
+}
+
+/* Whether cell c's segments may hold one nearer to q than best (a squared distance): its
+ * box is no farther than *r, best's near_bound (set when the cell holds segments: the
+ * bound its segments are read with). */
+static inline __attribute__((always_inline)) bool cell_may_hold(const cf_polyline *pl, size_t c,
+                                                              const double q[3], double best,
+                                                              double mag, double *r)
+{
+    if (pl->g_start[c] == pl->g_start[c + 1])
+        return false;
+    *r = near_bound(best, mag);
+    if (!(best < INFINITY))
+        return true;
+    const double *b = pl->g_box[pl->g_start[c]];
+    return ism_sqdist_box3(q, b, b + 3) <= *r * *r;
 }
 
 /* Whether segment sg lies farther than r from q: its ball (midpoint, half its length) does.
@@ -260,9 +260,9 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
         for (int j = a[1]; j <= b[1]; j++)
             for (int i = a[0]; i <= b[0]; i++) {
                 size_t c = cell_index(pl, i, j, k);
-                if (!cell_may_hold(pl, c, q, best, mag))
+                double r;
+                if (!cell_may_hold(pl, c, q, best, mag, &r))
                     continue;
-                double r = near_bound(best, mag);
                 for (uint32_t x = pl->g_start[c]; x < pl->g_start[c + 1]; x++) {
                     size_t sg = pl->g_seg[x];
                     if (seg_beyond(pl, sg, q, r))
@@ -291,9 +291,9 @@ static inline __attribute__((always_inline)) double cell_min2(const cf_polyline 
                                                             double best, double mag)
 {
     size_t c = cell_index(pl, i, j, k);
-    if (!cell_may_hold(pl, c, q, best, mag))
+    double r;
+    if (!cell_may_hold(pl, c, q, best, mag, &r))
         return best;
-    double r = near_bound(best, mag);
     for (uint32_t x = pl->g_start[c]; x < pl->g_start[c + 1]; x++) {
         size_t sg = pl->g_seg[x];
         if (seg_beyond(pl, sg, q, r))
