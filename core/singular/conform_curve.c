@@ -123,11 +123,18 @@ bool cf_polyline_init(cf_polyline *pl, const double *p, size_t n, bool closed, d
     pl->ball = malloc(nseg(pl) * sizeof *pl->ball);
     if (!pl->ball)
         return false;
+    /* each ball grown by more than the rounding of its midpoint, its radius and seg_beyond's
+     * comparison, which scale with the segment's coordinates and length: the query's slack
+     * (near_bound) scales with the query only */
     for (size_t i = 0; i < nseg(pl); i++) {
         const double *a = pt(pl, i), *b = pt(pl, i + 1);
-        for (int k = 0; k < 3; k++)
+        double mag = 0;
+        for (int k = 0; k < 3; k++) {
             pl->ball[i][k] = 0.5 * (a[k] + b[k]);
-        pl->ball[i][3] = 0.5 * ism_dist3(a, b);
+            mag = fmax(mag, fmax(fabs(a[k]), fabs(b[k])));
+        }
+        double h = 0.5 * ism_dist3(a, b);
+        pl->ball[i][3] = h + CF_QUERY_SLACK * (h + mag);
     }
     for (int k = 0; k < 3; k++)
         pl->hi[k] = hi[k];
@@ -227,8 +234,8 @@ static inline __attribute__((always_inline)) bool cell_may_hold(const cf_polylin
     return ism_sqdist_box3(q, b, b + 3) <= *r * *r;
 }
 
-/* Whether segment sg lies farther than r from q: its ball (midpoint, half its length) does.
- * With r a near_bound of the nearest so far, its distance exceeds that nearest's, so it could
+/* Whether segment sg lies farther than r from q: its ball (midpoint, half its length, grown
+ * by its rounding) does. With r a near_bound of the nearest so far, its distance exceeds that nearest's, so it could
  * replace it neither as nearer nor as an equal: not read (Klein bottle at E 0.00327: ~40
  * segments a query, most of them along the curve well beyond the nearest). */
 static inline __attribute__((always_inline)) bool seg_beyond(const cf_polyline *pl, size_t sg,

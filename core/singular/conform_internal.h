@@ -147,7 +147,8 @@ typedef struct cf_polyline {
     uint32_t *g_start, *g_seg; /* segments per grid cell (CSR) */
     double (*g_box)[6];     /* at g_start[c]: the box of cell c's segments clipped to the
                                cell (grown by the rounding slack): lo xyz, hi xyz */
-    double (*ball)[4];      /* per segment: its midpoint and half its length */
+    double (*ball)[4];      /* per segment: its midpoint and half its length (grown by
+                               its rounding) */
     bool pinch[2];          /* its first / last point is a pinch point (set by the caller
                                after cf_polyline_init; open curves only) */
 } cf_polyline;
