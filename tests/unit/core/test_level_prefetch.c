@@ -3,7 +3,10 @@
  * store, corners.h's single-root edges): on every node of a level of the unit sphere, the ring
  * torus and Barth's sextic, in three placements, the roots the prefetch searches in lanes and
  * logs are, edge for edge and bit for bit, the ones ism_cell_error searches one at a time on
- * the same corners with a memo of its own, and neither logs an edge the other does not. */
+ * the same corners with a memo of its own, and neither logs an edge the other does not; the
+ * prefetch's memo slots, which the build's tests read, hold the roots it logged (a claim
+ * writes t = 0 and the store must overwrite it), and ism_cell_error reading them measures
+ * each node's error bit for bit as with its own memo. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -12,6 +15,7 @@
 #include "core/octree/cell_error.h"
 #include "core/octree/level_prefetch.h"
 #include "core/octree/root_table.h"
+#include "core/util/grow.h"
 #include "poly_fixture.h"
 
 #define DEPTH 6   /* the lattice: 64 steps an axis */
@@ -42,6 +46,23 @@ static size_t distinct(ism_root_log *l)
     return m;
 }
 
+/* The slots of memo (nroots of them) holding an edge whose root is not the one log holds
+ * for it (its searches' roots, any order; sorted is a scratch copy of log's length). */
+static size_t stale_slots(const ism_root_entry *memo, size_t nroots, const ism_root_log *log,
+                          ism_root_entry *sorted)
+{
+    memcpy(sorted, log->v, log->n * sizeof *sorted);
+    qsort(sorted, log->n, sizeof *sorted, by_edge);
+    size_t bad = 0;
+    for (size_t i = 0; i < nroots; i++) {
+        if (!memo[i].a)
+            continue;
+        const ism_root_entry *e = bsearch(&memo[i], sorted, log->n, sizeof *sorted, by_edge);
+        bad += !e || memcmp(&e->t, &memo[i].t, sizeof(double)) != 0;
+    }
+    return bad;
+}
+
 static size_t compare(const pf_surface *surf, int placement)
 {
     ism_tape *t = pf_compile(surf);
@@ -63,16 +84,23 @@ static size_t compare(const pf_surface *surf, int placement)
     ism_point_entry *points = calloc((size_t)1 << ISM_CORNER_MEMO_BITS, sizeof *points);
     ism_root_entry *lanes_memo = calloc(nroots, sizeof *lanes_memo);
     ism_root_entry *one_memo = calloc(nroots, sizeof *one_memo);
-    cr_assert(points && lanes_memo && one_memo);
+    /* the prefetch's slots as each chunk left them, for ism_cell_error to read (its misses
+     * claim slots: on a copy, so that the next chunk's prefetch finds what it left) */
+    ism_root_entry *read_memo = calloc(nroots, sizeof *read_memo);
+    cr_assert(points && lanes_memo && one_memo && read_memo);
     ism_root_log lanes_log = {NULL, 0, 0, (size_t)1 << 24}, one_log = lanes_log;
+    ism_root_log read_log = lanes_log; /* the searches the reads missed */
+    ism_root_entry *sorted = NULL;
+    size_t sorted_cap = 0;
     ism_node_memo lanes = {lanes_memo, NULL, NULL, &lanes_log};
     ism_node_memo one = {one_memo, NULL, NULL, &one_log};
+    ism_node_memo read = {read_memo, NULL, NULL, &read_log};
     const int side = 1 << LEVEL, step = 1 << (DEPTH - LEVEL);
     ism_node nodes[CHUNK];
     const ism_node *at[CHUNK];
     ism_corners k[CHUNK];
     bool have[CHUNK];
-    size_t n = 0, measured = 0;
+    size_t n = 0, measured = 0, stale = 0, unequal = 0;
     for (int i = 0; i < side * side * side; i++) {
         ism_node nd = {{(i % side) * step, (i / side % side) * step, (i / side / side) * step},
                        -1, LEVEL, ISM_NODE_LEAF, 0, 0};
@@ -81,6 +109,9 @@ static size_t compare(const pf_surface *surf, int placement)
         if (++n < CHUNK && i + 1 < side * side * side)
             continue;
         ism_prefetch_nodes(&lanes, points, ISM_CORNER_MEMO_BITS, &g, at, n, &s, k, have);
+        cr_assert(ism_grow((void **)&sorted, &sorted_cap, lanes_log.n + 1, sizeof *sorted, 256));
+        stale += stale_slots(lanes_memo, nroots, &lanes_log, sorted);
+        memcpy(read_memo, lanes_memo, nroots * sizeof *read_memo);
         for (size_t j = 0; j < n; j++) {
             bool finite = have[j];
             for (int c = 0; c < 8 && finite; c++)
@@ -89,8 +120,12 @@ static size_t compare(const pf_surface *surf, int placement)
                 continue;
             ism_corners own = k[j];
             own.memo = &one;
-            double err;
+            ism_corners from_lanes = k[j];
+            from_lanes.memo = &read;
+            double err, err_lanes;
             ism_cell_error(&s, &own, 1e-3, 0, NULL, &err); /* its edge roots, one at a time */
+            ism_cell_error(&s, &from_lanes, 1e-3, 0, NULL, &err_lanes); /* as the build */
+            unequal += memcmp(&err, &err_lanes, sizeof err) != 0;
             measured++;
         }
         n = 0;
@@ -106,8 +141,18 @@ static size_t compare(const pf_surface *surf, int placement)
                   lanes_log.v[i].t, one_log.v[i].t);
     }
     cr_expect_gt(measured, 50, "%s: %zu nodes crossed", surf->expr, measured);
+    cr_expect_eq(stale, 0, "%s: %zu memo slots hold a root other than the logged one",
+                 surf->expr, stale);
+    cr_expect_eq(unequal, 0, "%s: %zu nodes measured otherwise from the prefetch's slots",
+                 surf->expr, unequal);
+    /* the reads found what the prefetch searched (a miss: its slot taken over in the chunk) */
+    cr_expect_lt(read_log.n * 10, na, "%s: %zu of the %zu edges missed", surf->expr,
+                 read_log.n, na);
     ism_root_log_free(&lanes_log);
     ism_root_log_free(&one_log);
+    ism_root_log_free(&read_log);
+    free(sorted);
+    free(read_memo);
     free(points);
     free(lanes_memo);
     free(one_memo);
