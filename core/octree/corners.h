@@ -58,18 +58,28 @@ static inline unsigned ism_edges_touching(unsigned m)
     return ism_edge_bits((m | m >> 1) & 0x55, (m | m >> 2) & 0x33, (m | m >> 4) & 0x0f);
 }
 
+/* The corners (bit c: corner c) where f (the 8 values) is below 0 into *neg, exactly 0 into
+ * *zero; NaN is in neither (reads as positive). */
+static inline void ism_corner_sign_masks(const double f[8], unsigned *neg, unsigned *zero)
+{
+    unsigned n = 0, z = 0;
+#pragma GCC unroll 8 /* a loop of 8 compares at -O2: ~180 instructions a node (prefetch) */
+    for (int c = 0; c < 8; c++) {
+        n |= (unsigned)(f[c] < 0) << c;
+        z |= (unsigned)(f[c] == 0) << c;
+    }
+    *neg = n;
+    *zero = z;
+}
+
 /* The edges holding a single root of f between their corners (f's 8 values): a sign change
  * with neither end 0 (a corner on f = 0 is a root of its own: ism_zero_corner_faces). NaN
  * reads as positive. The rule of the flatness test's edge roots (cell_error.c) and of the
  * build's prefetch of them (level_prefetch.c). */
 static inline unsigned ism_single_root_edges(const double f[8])
 {
-    unsigned neg = 0, zero = 0;
-#pragma GCC unroll 8 /* a loop of 8 compares at -O2: ~180 instructions a node (prefetch) */
-    for (int c = 0; c < 8; c++) {
-        neg |= (unsigned)(f[c] < 0) << c;
-        zero |= (unsigned)(f[c] == 0) << c;
-    }
+    unsigned neg, zero;
+    ism_corner_sign_masks(f, &neg, &zero);
     return ism_edges_across(neg) & ~ism_edges_touching(zero);
 }
 

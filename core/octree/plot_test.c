@@ -521,11 +521,8 @@ bool ism_plot_test(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
 
     double roots[12][3], centroid[3] = {0, 0, 0};
     int nroots = 0, face_cross[6] = {0}, ndisagree = 0, disagree[12];
-    unsigned neg = 0, zero = 0; /* the corners below 0, at 0 */
-    for (int c = 0; c < 8; c++) {
-        neg |= (unsigned)(f[c] < 0) << c;
-        zero |= (unsigned)(f[c] == 0) << c;
-    }
+    unsigned neg, zero; /* the corners below 0, at 0 */
+    ism_corner_sign_masks(f, &neg, &zero);
     /* an edge with a corner at 0 has no root here (the edge lies in f = 0), or the corner's
      * (below); of the others, those of one sign first, in edge order */
     unsigned off_zero = 0xfffu & ~ism_edges_touching(zero);
