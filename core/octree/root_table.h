@@ -11,7 +11,12 @@
  * Each build thread appends what it searches to a log of its own (no lock), up to the log's
  * limit (a share of the polygoniser's memory budget: polygonise.c ROOT_MEMORY_SHARE); after
  * the build the logs go one by one into one read-only open-addressing table that every cell
- * thread asks, each freed once in it (the logs and the table do not coexist whole). */
+ * thread asks, each freed once in it (the logs and the table do not coexist whole).
+ *
+ * It also owns the rule by which the build's two searchers of edge roots (cell_error.c,
+ * level_prefetch.c) use a thread's direct-mapped root memo (cell_cache.h ism_root_slot):
+ * ism_root_memo_find, ism_root_claim, ism_root_store, here beside the log the store appends
+ * to. */
 #ifndef ISM_ROOT_TABLE_H
 #define ISM_ROOT_TABLE_H
 
