@@ -38,7 +38,6 @@ typedef struct defer_list {
     size_t n;
 } defer_list;
 
-/* Room for extra more nodes (and their tape numbers when the build keeps them). */
 bool ism_build_vec_reserve(const build *b, node_vec *v, size_t extra)
 {
     return ism_grow((void **)&v->v, &v->cap, v->n + extra, sizeof *v->v, 256) &&
@@ -116,9 +115,8 @@ bool ism_build_fail(build *b, enum ism_build_status st)
     return false;
 }
 
-/* Adds the thread's new nodes to the shared count; false (and the build failed) beyond
- * max_nodes. Whether the whole tree fits does not depend on the batching: every node is
- * counted by the end of its task. */
+/* Whether the whole tree fits does not depend on the batching: every node is counted by the
+ * end of its task. */
 bool ism_build_count_nodes(build *b, thread_state *th)
 {
     size_t n = th->new_nodes;
