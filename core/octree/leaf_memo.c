@@ -43,19 +43,6 @@ static void pair(walk *w, int32_t a, int32_t b)
     w->split[w->nsplit++] = ism_node_lbox_of(w->before, x);
 }
 
-/* Do touching boxes b and c share more than a corner: a segment of an edge or more (on some
- * axis their ranges overlap in more than a point)? */
-static bool share_segment(const ism_node_lbox *b, const ism_node_lbox *c)
-{
-    for (int a = 0; a < 3; a++) {
-        int32_t lo = b->lo[a] > c->lo[a] ? b->lo[a] : c->lo[a];
-        int32_t hi = b->hi[a] < c->hi[a] ? b->hi[a] : c->hi[a];
-        if (hi > lo)
-            return true;
-    }
-    return false;
-}
-
 /* Strikes out the leaves of now under node i that share a segment or a face with box c. One
  * touching c at a corner alone keeps its output: what a leaf emits depends on its face
  * tiles (the leaves across its faces) and on the break points registered on its closed box
@@ -70,7 +57,7 @@ static void strike(walk *w, int32_t i, const ism_node_lbox *c)
     if (nd->state == ISM_NODE_SPLIT)
         for (int k = 0; k < 8; k++)
             strike(w, nd->child + k, c);
-    else if (share_segment(&b, c))
+    else if (ism_node_lboxes_share_segment(&b, c))
         w->match[i] = -1;
 }
 

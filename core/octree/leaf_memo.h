@@ -35,8 +35,8 @@ typedef struct ism_leaf_memo {
 /* For each leaf of `now` (leaves in node order), the index of the same leaf among
  * `before`'s leaves when its output may be copied, else -1 (a leaf new in `now`, or one
  * whose closed box shares an edge segment or a face with a leaf of `before` that `now`
- * splits). `now` must be `before`
- * with leaves split; reuse holds one entry per leaf of `now`. False when out of memory. */
+ * splits: ism_node_lboxes_share_segment). `now` must be `before` with leaves split; reuse
+ * holds one entry per leaf of `now`. False when out of memory. */
 bool ism_leaf_memo_match(const ism_octree *before, const ism_octree *now, int32_t *reuse);
 
 /* Room in out for the outputs of leaves reuse[0..n) (as ism_leaf_memo_match gives them),
