@@ -65,6 +65,14 @@ double ism_eval_gradient(const ism_tape *t, ism_eval_ws *ws, double x, double y,
  * (ism_emitted_error): tens, not hundreds. */
 #define ISM_GRAD_BATCH 32
 
+/* Points a chunk of ism_eval_gradient_batch runs through its unrolled copies at most (4
+ * groups of 4 lanes; eval_gradient_batch.c chunk_avx2, asserted there); a chunk of more runs
+ * its out-of-line wide loop, which costs more a point under AVX2 (Klein bottle's tape: 160
+ * instructions a point at 16, 206 at 32; eval_gradient_batch.c). Callers that pick their
+ * own pass size take this one (sampler.c). */
+#define ISM_GRAD_UNROLLED 16
+_Static_assert(ISM_GRAD_UNROLLED <= ISM_GRAD_BATCH, "the unrolled chunks are chunks");
+
 /* f[i] = f(x[i], y[i], z[i]) and g[i] = its gradient for i < n: lane by lane bit for bit what
  * ism_eval_gradient gives at that point (the same operations in the same order, a lane's
  * rounding never depends on another's), one pass over the tape per chunk of ISM_GRAD_BATCH

@@ -21,6 +21,7 @@
 #define GL ISM_GRAD_BATCH
 #define VL 4 /* lanes per group: one AVX2 vector, two SSE2 ones */
 _Static_assert(VL <= ISM_POWI_LANES, "a group's powers in one ism_powi_chain_lanes call");
+_Static_assert(ISM_GRAD_UNROLLED == 4 * VL, "chunk_avx2 unrolls 1 to 4 groups (eval.h)");
 
 /* Component k (0: value, 1-3: d/dx, d/dy, d/dz) of register r. */
 static inline double *comp(double *regs, uint32_t r, int k)

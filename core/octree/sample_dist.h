@@ -31,9 +31,9 @@ double ism_plain_dist(ism_sampler *s, const double p[3], double f, const double 
                       double e);
 
 /* ism_plain_dist of the n points p[0..n) (f, g: f and ∇f there) into out, the second steps'
- * gradients in batches (ism_sample_grad_batch, ISM_GRAD_BATCH at a time): the same values
- * bit for bit (tests/unit/core/test_stepped_dist.c), for callers that measure points in
- * batches. */
+ * gradients gathered ISM_GRAD_BATCH at a time (ism_sample_grad_batch, which evaluates them in
+ * passes of ISM_GRAD_UNROLLED: sampler.c): the same values bit for bit
+ * (tests/unit/core/test_stepped_dist.c), for callers that measure points in batches. */
 void ism_plain_dists(ism_sampler *s, const double (*p)[3], const double *f,
                      const double (*g)[3], double e, double *out, size_t n);
 

@@ -3,15 +3,14 @@
  * evaluated in one pass over its tape. */
 #include "core/octree/sampler.h"
 
-/* Lanes per pass, at most (ISM_GRAD_BATCH, eval.h, is 32): a pass of up to 16 points (4
- * groups of 4 lanes) runs the evaluator's unrolled copies, one of more its out-of-line wide
- * loop, which cost more a point — gyroid ball at 0.0109: 1,533 wide passes 13.1M, ~8.5K each,
- * where two passes of 16 cost less. At 16 (callgrind, one thread, ism_mesh_surface):
- * gyroid-ball 0.0109 −0.38%, 0.00109 −0.25%, klein-bottle 0.0141 −0.41%, barth-sextic 0.0259
- * −0.39%. The lanes' values do not depend on how points are grouped (eval.h), so neither
- * does anything measured. */
-#define SAMPLE_LANES 16
-_Static_assert(SAMPLE_LANES <= ISM_GRAD_BATCH, "a pass is one evaluator chunk");
+/* Lanes per pass, at most: the evaluator's unrolled width (ISM_GRAD_UNROLLED, eval.h; a
+ * pass of more runs its out-of-line wide loop, which costs more a point — gyroid ball at
+ * 0.0109: 1,533 wide passes 13.1M, ~8.5K each, where two passes of 16 cost less). At 16
+ * rather than ISM_GRAD_BATCH's 32 (callgrind, one thread, ism_mesh_surface): gyroid-ball
+ * 0.0109 −0.38%, 0.00109 −0.25%, klein-bottle 0.0141 −0.41%, barth-sextic 0.0259 −0.39%.
+ * The lanes' values do not depend on how points are grouped (eval.h), so neither does
+ * anything measured. */
+#define SAMPLE_LANES ISM_GRAD_UNROLLED
 
 /* One pass over at most SAMPLE_LANES points: the lanes whose tape is `local` first, then the
  * others, each group gathered into coordinate arrays and scattered back. */
