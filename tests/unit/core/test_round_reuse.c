@@ -22,11 +22,12 @@ static const pf_surface gyroid_ball = {
 
 typedef struct run_case {
     const pf_surface *s;
-    double half;      /* the box is [-half, half]^3 shifted by `cells` finest cells */
-    double cells;
+    double half;      /* the box is [-half, half]^3 ... */
+    double cells;     /* ... shifted by this many finest cells, unless placed */
     double max_error;
     int max_depth;
-    int placement;    /* > -2: the box is pf_sweep_box's placement of that number instead */
+    bool placed;      /* the box is instead pf_sweep_box's placement ... */
+    int placement;    /* ... of this number (-1: as given) */
 } run_case;
 
 static void run(const ism_tape *t, const run_case *c, int threads, bool fresh, ism_mesh *m,
@@ -34,14 +35,15 @@ static void run(const ism_tape *t, const run_case *c, int threads, bool fresh, i
 {
     ism_poly_options o;
     ism_poly_options_default(&o);
-    double shift = c->cells * 2 * c->half / (1 << c->max_depth);
-    for (int k = 0; k < 3; k++) {
-        o.box[k] = -c->half + shift;
-        o.box[3 + k] = c->half + shift;
-    }
-    if (c->placement > -2) {
+    if (c->placed) {
         const double base[6] = {-c->half, -c->half, -c->half, c->half, c->half, c->half};
         pf_sweep_box(base, c->max_depth, c->placement, o.box);
+    } else {
+        double shift = c->cells * 2 * c->half / (1 << c->max_depth);
+        for (int k = 0; k < 3; k++) {
+            o.box[k] = -c->half + shift;
+            o.box[3 + k] = c->half + shift;
+        }
     }
     o.max_depth = c->max_depth;
     o.max_error = c->max_error;
@@ -90,11 +92,11 @@ static void check(const run_case *c)
 
 Test(round_reuse, klein_bottle_off_the_lattice_as_computed_afresh)
 {
-    check(&(run_case){&klein, 4, PF_IRR, 3e-3, 8, -2});
+    check(&(run_case){&klein, 4, PF_IRR, 3e-3, 8, false, 0});
 }
 
 Test(round_reuse, gyroid_ball_in_three_placements_as_computed_afresh)
 {
     for (int which = pf_first_box() - 1; which <= 1; which++)
-        check(&(run_case){&gyroid_ball, 1.5, 0, 1.09e-2, 8, which});
+        check(&(run_case){&gyroid_ball, 1.5, 0, 1.09e-2, 8, true, which});
 }
