@@ -182,8 +182,10 @@ static inline __attribute__((always_inline)) ism_interval iv_mul(ism_interval a,
 #endif
 }
 
-/* a * c for a finite constant c != 0 of known sign (the batched evaluator picks one per
- * instruction); no product can be NaN. */
+/* a * c for a constant c of known sign, the choice taken once by the caller: iv_mul_c, the
+ * batched evaluator (its MUL_RC, one per instruction) and eval_interval_jet.c's mul_rc (once
+ * for a jet's value and partials; cneg also for a NaN c). A finite c != 0 gives no NaN bound;
+ * a NaN or infinite c (a tape's immediate may be either) can, and the caller cleans it. */
 static inline ism_interval iv_mul_cpos(ism_interval a, double c)
 {
 #if defined(__SSE2__)
