@@ -22,12 +22,19 @@
 #endif
 
 /* A static function NAME(PARAMS) (ARGS: its parameters' names, parenthesised) whose body, the
- * rest, is compiled twice, NAME_base and NAME_avx2, NAME calling the one the CPU runs. For
- * the one-box evaluators (eval_interval.c, eval_interval_jet.c), whose SSE2 interval
- * operations (interval_ops.h) take VEX's three-operand forms in the AVX2 one, no register
- * copy before each operation: the interval gradient pass ~10% fewer instructions, the
- * plain pass ~6% (callgrind, Klein's and Barth's tapes: notes/iv28.md). A body may hold
- * labels (each copy is its own function). */
+ * rest, is compiled twice, NAME_base and NAME_avx2, NAME calling the one the CPU runs; both
+ * copies are ordinary statics a test may call. For the one-box evaluators (eval_interval.c,
+ * eval_interval_jet.c), whose SSE2 interval operations (interval_ops.h) take VEX's
+ * three-operand forms in the AVX2 one: fewer register copies (figures: notes/iv28.md).
+ *
+ * A macro, not an always_inline body called from two targets: GCC will not inline a function
+ * that holds a computed goto, and the threaded evaluators (threaded.h) are such functions, so
+ * an inlined body would lose its threading. A body may hold labels (each copy is its own
+ * function) but no preprocessor line (#if, #pragma: directives inside a macro's arguments are
+ * undefined behaviour); use _Pragma.
+ *
+ * Older hand-written pairs to move onto it: eval_interval_grad_batch.c, eval_hessian_batch.c,
+ * eval_double.c, eval_gradient.c, eval_gradient_batch.c, dual_cert.c. */
 #if ISM_HAVE_AVX2_CLONE
 #define ISM_AVX2_TWICE(RET, NAME, PARAMS, ARGS, ...)                                       \
     static RET NAME##_base PARAMS { __VA_ARGS__ }                                            \

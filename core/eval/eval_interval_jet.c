@@ -760,7 +760,7 @@ static ALWAYS_INLINE void keep_vd(ism_kept_vd *k, const ism_ivjet *o)
 }
 
 /* Both compiled twice (avx2_clone.h's ISM_AVX2_TWICE: the same operations, VEX forms in the
- * AVX2 copy, ~10% fewer instructions a pass). */
+ * AVX2 copy; figures in notes/iv28.md). */
 ISM_AVX2_TWICE(size_t, run_grad,
                (const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                 const uint8_t *force, uint8_t *kinks, ism_ivjet *out),
