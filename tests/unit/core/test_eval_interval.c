@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "core/eval/interval_ops.h"
+#include "test_bits.h"
 #include "test_eval_surfaces.h"
 
 enum { PTS = 256 };
@@ -108,29 +109,11 @@ Test(eval_interval, outward_rounding_moves_at_least_one_ulp)
     cr_expect_eq(up1(INFINITY), INFINITY);
 }
 
-/* Bit patterns for the lanes test: a quarter subnormal (exponent field 0), the rest any. */
-static double lane_bits(test_rng *rng)
-{
-    uint64_t u = (uint64_t)(test_uniform(rng, 0, 0x1p32)) << 32 |
-                 (uint64_t)(test_uniform(rng, 0, 0x1p32));
-    if (test_uniform(rng, 0, 1) < 0.25)
-        u &= ~(0x7ffull << 52);
-    double x;
-    memcpy(&x, &u, sizeof x);
-    return x;
-}
-
-/* Equal bits, or both NaN (a NaN's sign may differ: see round1_out). */
-static int same_bits(double a, double b)
-{
-    return (a != a && b != b) || memcmp(&a, &b, sizeof a) == 0;
-}
-
 #define LANES_SAME(name, got, want_lo, want_hi)                                             \
     do {                                                                                    \
         ism_interval g_ = (got);                                                            \
         double wl_ = (want_lo), wh_ = (want_hi);                                            \
-        cr_assert(same_bits(g_.lo, wl_) && same_bits(g_.hi, wh_),                           \
+        cr_assert(test_same_bits(g_.lo, wl_) && test_same_bits(g_.hi, wh_),               \
                   "%s(a=[%a, %a], b=[%a, %a], c=%a) = [%a, %a], scalar [%a, %a]", name,     \
                   a.lo, a.hi, b.lo, b.hi, c, g_.lo, g_.hi, wl_, wh_);                       \
     } while (0)
@@ -138,9 +121,9 @@ static int same_bits(double a, double b)
 /* The SSE2 forms of the common operations (the only ones compiled on x86-64) against
  * down1 / up1 of the scalar expressions, written out here: the same bits for every input,
  * a NaN as a NaN; special values (signed zeros, infinities, NaN, subnormals, DBL_MAX) in
- * every pair, then random bit patterns. Swapping round1_out's lanes fails it. ism_iv_sane's
- * one-test form against the two NaN tests written out (no NaN left, each the side's
- * infinity). */
+ * every combination of the bounds an operation reads, then random bit patterns. Swapping
+ * round1_out's lanes fails it. ism_iv_sane's one-test form against the two NaN tests
+ * written out (no NaN left, each the side's infinity). */
 Test(eval_interval, sse2_lanes_are_the_scalar_bounds)
 {
     const double sp[] = { 0.0, -0.0, INFINITY, -INFINITY, NAN, -NAN, 0x1p-1074, -0x1p-1074,
@@ -148,18 +131,21 @@ Test(eval_interval, sse2_lanes_are_the_scalar_bounds)
                           DBL_MAX, -DBL_MAX, 0x1p-970, -0x1p-1000, 1.0, -1.0, 3.0, -0.5 };
     enum { NSP = sizeof sp / sizeof sp[0] };
     test_rng rng = { 27 };
-    size_t n = NSP * NSP * NSP + test_scaled(400000);
+    /* each of a.lo, a.hi, b.lo, b.hi its own digit: every 4-tuple of special values; c, which
+     * meets only a, the third digit: every (a.lo, a.hi, c) */
+    enum { NSP4 = NSP * NSP * NSP * NSP };
+    size_t n = NSP4 + test_scaled(400000);
     for (size_t i = 0; i < n; i++) {
         ism_interval a, b;
         double c;
-        if (i < NSP * NSP * NSP) {
+        if (i < NSP4) {
             a = iv(sp[i % NSP], sp[i / NSP % NSP]);
-            b = iv(sp[i / NSP / NSP], sp[(i + 3) % NSP]);
-            c = sp[(i / NSP + 7) % NSP];
+            b = iv(sp[i / NSP / NSP % NSP], sp[i / NSP / NSP / NSP % NSP]);
+            c = sp[i / NSP / NSP % NSP];
         } else {
-            a = iv(lane_bits(&rng), lane_bits(&rng));
-            b = iv(lane_bits(&rng), lane_bits(&rng));
-            c = lane_bits(&rng);
+            a = iv(test_any_bits(&rng), test_any_bits(&rng));
+            b = iv(test_any_bits(&rng), test_any_bits(&rng));
+            c = test_any_bits(&rng);
         }
         LANES_SAME("iv_add", iv_add(a, b), down1(a.lo + b.lo), up1(a.hi + b.hi));
         LANES_SAME("iv_add_c", iv_add_c(a, c), down1(a.lo + c), up1(a.hi + c));

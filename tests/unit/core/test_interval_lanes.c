@@ -3,9 +3,10 @@
  * baseline and, where the CPU has it, as an AVX2 clone (avx2_clone.h): the batched interval
  * gradient pass and the dual mesher's proofs rely on it ("the same bits" in
  * eval_interval_grad_batch.c and dual_cert.c). Special values (signed zeros, infinities,
- * NaN, subnormals, DBL_MAX) in every pair of operands, then random bit patterns. vmin / vmax
- * are written element by element (a < b ? a : b, which compiles to minpd / vminpd), so this
- * also checks that the comparison's order and its NaN and signed-zero cases are ism_min's. */
+ * NaN, subnormals, DBL_MAX) in every combination of the operands' bounds and the constant,
+ * then random bit patterns. vmin / vmax are written element by element (a < b ? a : b,
+ * which compiles to minpd / vminpd), so this also checks that the comparison's order and
+ * its NaN and signed-zero cases are ism_min's. */
 #include <criterion/criterion.h>
 #include <float.h>
 #include <math.h>
@@ -14,6 +15,7 @@
 
 #include "core/eval/avx2_clone.h"
 #include "core/eval/interval_lanes.h"
+#include "test_bits.h"
 #include "test_eval_surfaces.h"
 
 /* The operations' results per lane: add, sub, neg, mul_c, mul, square, as intervals, then
@@ -30,52 +32,25 @@ INLINE void store_vi(lane_out *o, int k, vi v)
     v4_st(o->hi[k], v.hi);
 }
 
-#define LANE_OPS_BODY                                                                       \
-    vi a = {v4_ld(alo), v4_ld(ahi)}, b = {v4_ld(blo), v4_ld(bhi)};                          \
-    store_vi(o, R_ADD, v_add(a, b));                                                        \
-    store_vi(o, R_SUB, v_sub(a, b));                                                        \
-    store_vi(o, R_NEG, v_neg(a));                                                           \
-    store_vi(o, R_MULC, v_mul_c(a, c));                                                     \
-    store_vi(o, R_MUL, v_mul(a, b));                                                        \
-    store_vi(o, R_SQUARE, v_square(a));                                                     \
-    v4_st(o->mn, vmin(a.lo, b.lo));                                                         \
-    v4_st(o->mx, vmax(a.hi, b.hi));                                                         \
-    v4_st(o->nz, vnan_to(a.lo * b.hi, 0.0));
-
-static void lane_ops_base(const double *alo, const double *ahi, const double *blo,
-                          const double *bhi, double c, lane_out *o)
-{
-    LANE_OPS_BODY
-}
-
-#if ISM_HAVE_AVX2_CLONE
-ISM_AVX2_CLONE static void lane_ops_avx2(const double *alo, const double *ahi,
-                                         const double *blo, const double *bhi, double c,
-                                         lane_out *o)
-{
-    LANE_OPS_BODY
-}
-#endif
-
-/* Equal bits, or both NaN (a NaN's sign may differ: interval_ops.h's round1_out). */
-static int same_bits(double a, double b)
-{
-    return (a != a && b != b) || memcmp(&a, &b, sizeof a) == 0;
-}
-
-static double any_bits(test_rng *rng)
-{
-    uint64_t u = (uint64_t)(test_uniform(rng, 0, 0x1p32)) << 32 |
-                 (uint64_t)(test_uniform(rng, 0, 0x1p32));
-    if (test_uniform(rng, 0, 1) < 0.25)
-        u &= ~(0x7ffull << 52); /* a subnormal or a zero */
-    double x;
-    memcpy(&x, &u, sizeof x);
-    return x;
-}
+/* Compiled twice (avx2_clone.h): lane_ops runs the copy the CPU takes; where the AVX2 clone
+ * is built the test also calls lane_ops_base. */
+ISM_AVX2_TWICE(void, lane_ops,
+               (const double *alo, const double *ahi, const double *blo, const double *bhi,
+                double c, lane_out *o),
+               (alo, ahi, blo, bhi, c, o),
+    vi a = {v4_ld(alo), v4_ld(ahi)}, b = {v4_ld(blo), v4_ld(bhi)};
+    store_vi(o, R_ADD, v_add(a, b));
+    store_vi(o, R_SUB, v_sub(a, b));
+    store_vi(o, R_NEG, v_neg(a));
+    store_vi(o, R_MULC, v_mul_c(a, c));
+    store_vi(o, R_MUL, v_mul(a, b));
+    store_vi(o, R_SQUARE, v_square(a));
+    v4_st(o->mn, vmin(a.lo, b.lo));
+    v4_st(o->mx, vmax(a.hi, b.hi));
+    v4_st(o->nz, vnan_to(a.lo * b.hi, 0.0));)
 
 #define SAME(what, got, want)                                                               \
-    cr_assert(same_bits((got), (want)),                                                     \
+    cr_assert(test_same_bits((got), (want)),                                                     \
               "%s lane %d (a=[%a, %a], b=[%a, %a], c=%a): %a, scalar %a", what, j, a.lo,    \
               a.hi, b.lo, b.hi, c, (got), (want))
 #define SAME_IV(what, k, want)                                                              \
@@ -108,37 +83,36 @@ Test(interval_lanes, every_lane_is_the_scalar_operation)
     const double sp[] = { 0.0, -0.0, INFINITY, -INFINITY, NAN, -NAN, 0x1p-1074, -0x1p-1074,
                           0x1p-1022, -0x1.ffffffffffffep-1023, DBL_MAX, -DBL_MAX, 1.0, -1.0,
                           3.0, -0.5 };
-    enum { NSP = sizeof sp / sizeof sp[0] };
+    enum { NSP = sizeof sp / sizeof sp[0], NSP4 = NSP * NSP * NSP * NSP, NSP5 = NSP4 * NSP };
     test_rng rng = { 28 };
-    /* every pair of special values in some lane and bound, then random bits */
-    size_t n = NSP * NSP * NSP / 4 + test_scaled(100000);
+    /* every 5-tuple of special values, each operand bound its own digit of the lane index
+     * q = 4 (i / NSP) + j and c the last, i % NSP; then random bits */
+    size_t n = NSP5 / 4 + test_scaled(100000);
     for (size_t i = 0; i < n; i++) {
         double alo[4], ahi[4], blo[4], bhi[4], c;
         for (int j = 0; j < 4; j++) {
-            size_t q = 4 * i + (size_t)j;
-            if (i < NSP * NSP * NSP / 4) {
+            size_t q = 4 * (i / NSP) + (size_t)j;
+            if (i < NSP5 / 4) {
                 alo[j] = sp[q % NSP];
                 ahi[j] = sp[q / NSP % NSP];
                 blo[j] = sp[q / NSP / NSP % NSP];
-                bhi[j] = sp[(q + 5) % NSP];
+                bhi[j] = sp[q / NSP / NSP / NSP % NSP];
             } else {
-                alo[j] = any_bits(&rng);
-                ahi[j] = any_bits(&rng);
-                blo[j] = any_bits(&rng);
-                bhi[j] = any_bits(&rng);
+                alo[j] = test_any_bits(&rng);
+                ahi[j] = test_any_bits(&rng);
+                blo[j] = test_any_bits(&rng);
+                bhi[j] = test_any_bits(&rng);
             }
         }
-        c = i < NSP * NSP * NSP / 4 ? sp[(i + 3) % NSP] : any_bits(&rng);
+        c = i < NSP5 / 4 ? sp[i % NSP] : test_any_bits(&rng);
         if (!(fabs(c) <= DBL_MAX))
             c = -2.5; /* v_mul_c's constant is finite (a tape's immediate) */
         lane_out o;
-        lane_ops_base(alo, ahi, blo, bhi, c, &o);
+        lane_ops(alo, ahi, blo, bhi, c, &o); /* the copy this CPU runs */
         check_lanes(alo, ahi, blo, bhi, c, &o);
 #if ISM_HAVE_AVX2_CLONE
-        if (ISM_RUN_AVX2()) {
-            lane_ops_avx2(alo, ahi, blo, bhi, c, &o);
-            check_lanes(alo, ahi, blo, bhi, c, &o);
-        }
+        lane_ops_base(alo, ahi, blo, bhi, c, &o); /* and the baseline */
+        check_lanes(alo, ahi, blo, bhi, c, &o);
 #endif
     }
 }
