@@ -209,7 +209,7 @@ static ALWAYS_INLINE void sanitize(double *restrict ol, double *restrict onh, si
 /* Every operation's step over the first m lanes (a multiple of LANES) of every register, as
  * a statement in ol, onh (its register's bounds), al, anh, bl, bnh (its operands'; b is a
  * when the operation reads no second register), c (its constant), in, m and mode: one list,
- * expanded by CHUNKS_BODY's labels. */
+ * expanded by chunks's labels. */
 #define BATCH_OPS(X)                                                                        \
     X(ISM_OP_CONST, for (size_t j = 0; j < m; j++) {                                        \
         ol[j] = sane(c);                                                                    \
@@ -352,44 +352,29 @@ static ALWAYS_INLINE void chunk_in(double *lo, double *nh, const ism_interval *x
 /* Every chunk in round-down mode (the caller's mode restored after), each through the whole
  * tape by direct threading (threaded.h: each step's code ends in its own end test and jump,
  * where a switch in a loop paid a bound test, the switch's table, the loop's test and every
- * step the constant's test); compiled for AVX2 and for the x86-64 baseline, chosen at run
- * time (see eval_double.c). A macro: each expansion needs its own labels. */
-#define CHUNKS_BODY                                                                     \
-    ISM_THREADED_TABLE(next_op, BATCH_OPS);                                             \
-    rounding mode = rounding_get();                                                     \
-    rounding_set(rounding_down(mode));                                                  \
-    for (size_t done = 0; done < n; done += ISM_IV_CHUNK) {                             \
-        size_t k = n - done < ISM_IV_CHUNK ? n - done : ISM_IV_CHUNK;                   \
-        size_t m = (k + LANES - 1) / LANES * LANES;                                     \
-        chunk_in(lo, nh, x + done, y + done, z + done, k, m);                           \
-        const ism_instr *in = t->code, *const end = t->code + t->len;                   \
-        if (in == end)                                                                  \
-            goto tape_done;                                                             \
-        goto *next_op[in->op];                                                          \
-        BATCH_OPS(BATCH_STEP)                                                           \
-        BATCH_STEP_AS(L_BAD, ism_op_has_reg_b(in->op), NEAREST)                         \
-    tape_done:;                                                                         \
-        size_t r = (size_t)t->result * ISM_IV_CHUNK;                                    \
-        unpack(lo + r, nh + r, out + done, k);                                          \
-    }                                                                                   \
-    rounding_set(mode);
-
-#if ISM_HAVE_AVX2_CLONE
-ISM_AVX2_CLONE
-static void chunks_avx2(const ism_tape *t, double *lo, double *nh, const ism_interval *x,
-                        const ism_interval *y, const ism_interval *z, ism_interval *out,
-                        size_t n)
-{
-    CHUNKS_BODY
-}
-#endif
-
-static void chunks_base(const ism_tape *t, double *lo, double *nh, const ism_interval *x,
-                        const ism_interval *y, const ism_interval *z, ism_interval *out,
-                        size_t n)
-{
-    CHUNKS_BODY
-}
+ * step the constant's test); compiled twice (avx2_clone.h's ISM_AVX2_TWICE). */
+ISM_AVX2_TWICE(void, chunks,
+               (const ism_tape *t, double *lo, double *nh, const ism_interval *x,
+                const ism_interval *y, const ism_interval *z, ism_interval *out, size_t n),
+               (t, lo, nh, x, y, z, out, n),
+    ISM_THREADED_TABLE(next_op, BATCH_OPS);
+    rounding mode = rounding_get();
+    rounding_set(rounding_down(mode));
+    for (size_t done = 0; done < n; done += ISM_IV_CHUNK) {
+        size_t k = n - done < ISM_IV_CHUNK ? n - done : ISM_IV_CHUNK;
+        size_t m = (k + LANES - 1) / LANES * LANES;
+        chunk_in(lo, nh, x + done, y + done, z + done, k, m);
+        const ism_instr *in = t->code, *const end = t->code + t->len;
+        if (in == end)
+            goto tape_done;
+        goto *next_op[in->op];
+        BATCH_OPS(BATCH_STEP)
+        BATCH_STEP_AS(L_BAD, ism_op_has_reg_b(in->op), NEAREST)
+    tape_done:;
+        size_t r = (size_t)t->result * ISM_IV_CHUNK;
+        unpack(lo + r, nh + r, out + done, k);
+    }
+    rounding_set(mode);)
 
 void ism_eval_interval_batch(const ism_tape *t, ism_eval_ws *ws, const ism_interval *x,
                              const ism_interval *y, const ism_interval *z, ism_interval *out,
@@ -402,11 +387,5 @@ void ism_eval_interval_batch(const ism_tape *t, ism_eval_ws *ws, const ism_inter
     }
     if (n == 0)
         return;
-#if ISM_HAVE_AVX2_CLONE
-    if (ISM_RUN_AVX2()) {
-        chunks_avx2(t, ws->iv_lo, ws->iv_hi, x, y, z, out, n);
-        return;
-    }
-#endif
-    chunks_base(t, ws->iv_lo, ws->iv_hi, x, y, z, out, n);
+    chunks(t, ws->iv_lo, ws->iv_hi, x, y, z, out, n);
 }
