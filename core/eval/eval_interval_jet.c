@@ -185,7 +185,6 @@ static ALWAYS_INLINE void chain(ism_ivjet *o, const ism_ivjet *a, ism_interval g
 
 static ism_interval lin_copy(ism_interval u, double c) { (void)c; return u; }
 static ism_interval lin_neg(ism_interval u, double c) { (void)c; return iv_neg(u); }
-static ism_interval lin_mul(ism_interval u, double c) { return iv_mul_c(u, c); }
 /* iv_mul_c's three cases, its test of c taken once for the value and every partial */
 static ism_interval lin_zero(ism_interval u, double c) { (void)u; (void)c; return ivc(0.0); }
 static ism_interval lin_mul_pos(ism_interval u, double c) { return iv_mul_cpos(u, c); }
@@ -211,20 +210,36 @@ static ALWAYS_INLINE void each(ism_ivjet *o, const ism_ivjet *a, ism_interval (*
         each_hess(o, a, fn, c, w);
 }
 
-/* out = s * a + shift for a constant factor s: derivatives scale exactly as the value. */
-static ALWAYS_INLINE void affine(ism_ivjet *o, const ism_ivjet *a, int op, double c, unsigned w)
+/* o = a * c (MUL_RC), iv_mul_c's choice (0, c > 0, else c < 0 or NaN) taken once for every
+ * part: the value and partials (affine) or, hess_only, the Hessian alone (hess_op), so both
+ * passes take the same branch for the same operation. */
+static ALWAYS_INLINE void mul_rc(ism_ivjet *o, const ism_ivjet *a, double c, unsigned w,
+                                 bool hess_only)
 {
-    switch (op) {
-    case ISM_OP_NEG: each(o, a, lin_neg, c, w); break;
-    case ISM_OP_SUB_CR: each(o, a, lin_neg, c, w); o->v = iv_c_sub(c, a->v); break;
-    case ISM_OP_MUL_RC: /* iv_mul_c's choice: 0, c > 0, else (c < 0, or NaN) */
+    if (hess_only) {
+        if (c == 0.0)
+            each_hess(o, a, lin_zero, c, w);
+        else if (c > 0.0)
+            each_hess(o, a, lin_mul_pos, c, w);
+        else
+            each_hess(o, a, lin_mul_neg, c, w);
+    } else {
         if (c == 0.0)
             each(o, a, lin_zero, c, w);
         else if (c > 0.0)
             each(o, a, lin_mul_pos, c, w);
         else
             each(o, a, lin_mul_neg, c, w);
-        break;
+    }
+}
+
+/* out = s * a + shift for a constant factor s: derivatives scale exactly as the value. */
+static ALWAYS_INLINE void affine(ism_ivjet *o, const ism_ivjet *a, int op, double c, unsigned w)
+{
+    switch (op) {
+    case ISM_OP_NEG: each(o, a, lin_neg, c, w); break;
+    case ISM_OP_SUB_CR: each(o, a, lin_neg, c, w); o->v = iv_c_sub(c, a->v); break;
+    case ISM_OP_MUL_RC: mul_rc(o, a, c, w, false); break;
     case ISM_OP_DIV_RC: each(o, a, lin_div, c, w); break;
     case ISM_OP_ADD_RC: each(o, a, lin_copy, c, w); o->v = iv_add_c(a->v, c); break;
     default: each(o, a, lin_copy, c, w); break; /* COPY */
@@ -794,7 +809,7 @@ static ALWAYS_INLINE void hess_op(const ism_instr *in, ism_ivjet *r, unsigned w)
         return;
     case ISM_OP_COPY: case ISM_OP_ADD_RC: each_hess(o, a, lin_copy, in->imm, w); return;
     case ISM_OP_SUB_CR: case ISM_OP_NEG: each_hess(o, a, lin_neg, in->imm, w); return;
-    case ISM_OP_MUL_RC: each_hess(o, a, lin_mul, in->imm, w); return;
+    case ISM_OP_MUL_RC: mul_rc(o, a, in->imm, w, true); return;
     case ISM_OP_DIV_RC: each_hess(o, a, lin_div, in->imm, w); return;
     case ISM_OP_ADD_RR: add_hess(o, a, &r[in->b], 0, w); return;
     case ISM_OP_SUB_RR: add_hess(o, a, &r[in->b], 1, w); return;
