@@ -8,7 +8,8 @@
  * Built with -DISM_BASELINE_ONLY (the Makefile's sanitizer build, SAN=1) the AVX2 clones are
  * not compiled and the baseline always runs, so `make test` checks the bits of both on an AVX2
  * machine: the release lane the AVX2 clones, the sanitizer lane the baseline (the evaluators'
- * bit-for-bit tests, eval_* and batch_identity, against the same expectations). A compile-time
+ * bit-for-bit tests against the same expectations: interval_golden's committed digests of
+ * the interval passes' outputs, interval_lanes, eval_*, batch_identity). A compile-time
  * switch, not a run-time one: core/ keeps no mutable global state. */
 #ifndef ISM_AVX2_CLONE_H
 #define ISM_AVX2_CLONE_H
