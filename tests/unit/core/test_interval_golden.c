@@ -95,6 +95,7 @@ static void digests_of(const ism_tape *t, uint64_t out[D_N])
         box_of(k, &rng, b);
         for (int a = 0; a < 3; a++)
             bx[a * NBOX + k] = b[a];
+        memset(buf, 0, len + 1); /* choices are written at min, max and abs only */
         ism_interval r = ism_interval_run(t, ews, b[0], b[1], b[2], buf);
         mix_doubles(&d[D_RUN], &r.lo, 2);
         mix_bytes(&d[D_RUN], buf, len);
@@ -154,12 +155,13 @@ static void check_golden(const test_surface *s, const uint64_t want[D_N])
     ism_tape_free(t);
 }
 
-/* Digests taken with the AVX2 copies (release build of main 9b0c06d7) and checked equal by
- * the baseline (SAN=1, ISM_BASELINE_ONLY). */
+/* Digests taken with the AVX2 copies (release build; all but interval_run's on main
+ * 9b0c06d7's objects, the same after revP 3 and 4) and checked equal by the baseline (SAN=1,
+ * ISM_BASELINE_ONLY). */
 Test(interval_golden, torus)
 {
     static const uint64_t want[D_N] = {
-        0xf9df2fcacb7f9606ULL, 0x6406c319f93a441fULL, 0xacf87400d42df269ULL, 0x17f0b7a2c0b3ccf9ULL,
+        0x38849cc29f758440ULL, 0x6406c319f93a441fULL, 0xacf87400d42df269ULL, 0x17f0b7a2c0b3ccf9ULL,
         0xd9e33a9a93ea841dULL, 0xfa043194e7829a60ULL, 0xc995e9d5ddd5ba18ULL,
     };
     check_golden(test_surface_named("torus"), want);
@@ -168,7 +170,7 @@ Test(interval_golden, torus)
 Test(interval_golden, klein_bottle)
 {
     static const uint64_t want[D_N] = {
-        0xfe23982d99f177b5ULL, 0xbdeb6c2cf0fea06eULL, 0xfbcc127d9577e2acULL, 0x0082395bca757f4cULL,
+        0x0793cdf6939bca35ULL, 0xbdeb6c2cf0fea06eULL, 0xfbcc127d9577e2acULL, 0x0082395bca757f4cULL,
         0x46f505cf67940bc6ULL, 0x569304a1cd813b1bULL, 0x147cf9a58ab52bebULL,
     };
     check_golden(test_surface_named("klein-bottle"), want);
@@ -177,7 +179,7 @@ Test(interval_golden, klein_bottle)
 Test(interval_golden, division_sqrt_min_abs)
 {
     static const uint64_t want[D_N] = {
-        0xebb6ff7bccc97880ULL, 0xe956b464b73aa51eULL, 0x80c36e6f3d4a7280ULL, 0xd06a9f45c6a59e17ULL,
+        0x86744fc8fd791e71ULL, 0xe956b464b73aa51eULL, 0x80c36e6f3d4a7280ULL, 0xd06a9f45c6a59e17ULL,
         0x40d69e0cf0f65c45ULL, 0xb6d747724a0990a2ULL, 0x28bd2f0b6cf77529ULL,
     };
     check_golden(&MIXED, want);
