@@ -807,8 +807,8 @@ static void roots_mean(const dual *d, const dnode *n, const double lo[3], const 
         m[a] = roots ? m[a] / roots : 0.5 * lo[a] + 0.5 * hi[a];
 }
 
-/* ism_dual_feet_in_nodes of the na boxes lo[i]..hi[i] (side size[i]) into m[at[i]] and, state
- * not NULL, state[at[i]]. */
+/* ism_dual_feet_in_nodes of the na boxes lo[i]..hi[i] (side size[i]) into m[at[i]] and
+ * state[at[i]]. */
 static void lane_feet(worker *w, const double (*lo)[3], const double (*hi)[3],
                       const double *size, const size_t *at, size_t na, double (*m)[3],
                       uint8_t *state)
@@ -820,8 +820,7 @@ static void lane_feet(worker *w, const double (*lo)[3], const double (*hi)[3],
     ism_dual_feet_in_nodes(w, lo, hi, size, na, foot, st);
     for (size_t i = 0; i < na; i++) {
         memcpy(m[at[i]], foot[i], sizeof foot[i]);
-        if (state)
-            state[at[i]] = st[i];
+        state[at[i]] = st[i];
     }
 }
 
@@ -838,9 +837,7 @@ static void lane_feet(worker *w, const double (*lo)[3], const double (*hi)[3],
  * 3,108 / 8,220, torus 3,280 / 5,968 / 20,464 -> 3,536 / 5,792 / 17,472 (-9% over the six).
  * The one routine for these steps, each in lanes: the centres' feet not taken yet
  * (ism_dual_feet_in_nodes), then Newton from the secant roots' mean for those whose foot
- * left the leaf (ism_dual_feet_in_nodes again, each box the one point, its centre: the box's
- * verdict unread; ism_dual_newton_onto where a subnormal coordinate is not its box's
- * centre), then f's jets at the points in one batch for the straddle move
+ * left the leaf (ism_dual_newton_lanes), then f's jets at the points in one batch for the straddle move
  * (ism_eval_hessian_batch, as feet_task's). One by one, Newton's gradients and the Hessian
  * cost ~1,040 instructions each a leaf (sphere at 0.00714: 120 leaves whose foot left
  * them). */
@@ -871,18 +868,14 @@ static void place_plain(dual *d, worker *w, const int32_t *leaf, size_t n)
         if (state[j] == FOOT_AT)
             continue;
         roots_mean(d, &d->n[leaf[j]], lo[j], hi[j], m[j]);
-        bool centre = true; /* the one point's box has it as its centre (not so when subnormal) */
-        for (int c = 0; c < 3; c++)
-            centre &= 0.5 * m[j][c] + 0.5 * m[j][c] == m[j][c];
-        if (!centre) {
-            ism_dual_newton_onto(w, m[j], size[j]);
-            continue;
-        }
         memcpy(a[na], m[j], sizeof a[na]);
         sz[na] = size[j];
         at[na++] = j;
     }
-    lane_feet(w, (const double (*)[3])a, (const double (*)[3])a, sz, at, na, m, NULL);
+    bool ok[MEASURE_LANES]; /* unread: a lane Newton failed in keeps where it stopped */
+    ism_dual_newton_lanes(w, a, sz, na, ok);
+    for (size_t i = 0; i < na; i++)
+        memcpy(m[at[i]], a[i], sizeof a[i]);
     if (d->shift > 0) {
         double f[MEASURE_LANES], g[MEASURE_LANES][3], h[MEASURE_LANES][6];
         ism_eval_hessian_batch(w->s.tape, w->s.ws, (const double (*)[3])m, f, g, h, n);

@@ -425,50 +425,10 @@ static uint64_t quad_key(const dual *d, const uint32_t *u)
     return ((uint64_t)u[0] << 48 | (uint64_t)u[1] << 32 | (uint64_t)u[2] << 16 | u[3]) + 1;
 }
 
-void ism_dual_vertex_onto(dual *d, worker *w, double m[3], double size, double out[3])
+void ism_dual_vertices_onto(const dual *d, worker *w, double (*m)[3], const double *size,
+                            size_t n, double (*out)[3])
 {
-    double q[3];
-    if (!ism_dual_newton_onto(w, m, size)) {
-        out[0] = out[1] = out[2] = NAN;
-        return;
-    }
-    if (d->shift > 0 && ism_straddle_balanced_point(&w->s, d->shift, d->o->box, m, q, NULL))
-        memcpy(m, q, 3 * sizeof *m);
-    memcpy(out, m, 3 * sizeof *m);
-}
-
-/* Task k (job: in the quads, out the centres, n how many): the centres of the quads at
- * in[MEASURE_LANES k ..] into out (3 each): the mean of each quad's corners as a vertex,
- * within its longer diagonal, NaN when Newton cannot finish — ism_dual_vertex_onto's, bit for
- * bit, in lanes: Newton's gradients in one batch a step (ism_dual_newton_lanes), the jets
- * for the straddle move in one Hessian batch (as place_plain's; one fan at a time cost the
- * sphere at E 0.0141 ~2.5K instructions a fan, 54 fans). A pure function of the corners,
- * like the vertices. */
-static void fan_task(void *ctx, size_t k, int thread)
-{
-    task_ctx *job = ctx;
-    dual *d = job->d;
-    worker *w = &d->w[thread];
-    size_t lo, n = chunk_of(k, job->n, &lo);
-    /* size zeroed: n >= 1 of it set, which gcc cannot see (maybe-uninitialized) */
-    double m[MEASURE_LANES][3], size[MEASURE_LANES] = {0}, *out = (double *)job->out;
     bool ok[MEASURE_LANES];
-    for (size_t j = 0; j < n; j++) {
-        const uint32_t *u = &d->q.q[4 * ((const uint32_t *)job->in)[lo + j]];
-        m[j][0] = m[j][1] = m[j][2] = 0;
-        size[j] = 0;
-        for (int c = 0; c < 4; c++)
-            for (int a = 0; a < 3; a++)
-                m[j][a] += 0.25 * d->pos[3 * u[c] + a];
-        for (int c = 0; c < 2; c++) {
-            double l = 0;
-            for (int a = 0; a < 3; a++) {
-                double t = d->pos[3 * u[c + 2] + a] - d->pos[3 * u[c] + a];
-                l += t * t;
-            }
-            size[j] = fmax(size[j], sqrt(l));
-        }
-    }
     ism_dual_newton_lanes(w, m, size, n, ok);
     if (d->shift > 0) { /* ism_straddle_balanced_point's move, from jets taken at once */
         double p[MEASURE_LANES][3], f[MEASURE_LANES], g[MEASURE_LANES][3], h[MEASURE_LANES][6];
@@ -491,7 +451,39 @@ static void fan_task(void *ctx, size_t k, int thread)
     }
     for (size_t j = 0; j < n; j++)
         for (int a = 0; a < 3; a++)
-            out[3 * (lo + j) + a] = ok[j] ? m[j][a] : NAN;
+            out[j][a] = ok[j] ? m[j][a] : NAN;
+}
+
+/* Task k (job: in the quads, out the centres, n how many): the centres of the quads at
+ * in[MEASURE_LANES k ..] into out (3 each): the mean of each quad's corners as a vertex,
+ * within its longer diagonal, NaN when Newton cannot finish (ism_dual_vertices_onto: one
+ * fan at a time cost the sphere at E 0.0141 ~2.5K instructions a fan, 54 fans). A pure
+ * function of the corners, like the vertices. */
+static void fan_task(void *ctx, size_t k, int thread)
+{
+    task_ctx *job = ctx;
+    dual *d = job->d;
+    worker *w = &d->w[thread];
+    size_t lo, n = chunk_of(k, job->n, &lo);
+    /* size zeroed: n >= 1 of it set, which gcc cannot see (maybe-uninitialized) */
+    double m[MEASURE_LANES][3], size[MEASURE_LANES] = {0}, *out = (double *)job->out;
+    for (size_t j = 0; j < n; j++) {
+        const uint32_t *u = &d->q.q[4 * ((const uint32_t *)job->in)[lo + j]];
+        m[j][0] = m[j][1] = m[j][2] = 0;
+        size[j] = 0;
+        for (int c = 0; c < 4; c++)
+            for (int a = 0; a < 3; a++)
+                m[j][a] += 0.25 * d->pos[3 * u[c] + a];
+        for (int c = 0; c < 2; c++) {
+            double l = 0;
+            for (int a = 0; a < 3; a++) {
+                double t = d->pos[3 * u[c + 2] + a] - d->pos[3 * u[c] + a];
+                l += t * t;
+            }
+            size[j] = fmax(size[j], sqrt(l));
+        }
+    }
+    ism_dual_vertices_onto(d, w, m, size, n, (double (*)[3])(out + 3 * lo));
 }
 
 /* Would four triangles round a centre do better than the two in tri[0..6) (a quad cut across

@@ -48,10 +48,15 @@ void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t
  * on thread 0). */
 double ism_dual_mid_dist(dual *d, uint32_t a, uint32_t b);
 
-/* m (a point near f = 0, within size of it) moved onto f = 0 by Newton and then as a leaf's
- * vertex is (place_vertex: the straddle move) into out; NaN there when Newton cannot
- * finish. A pure function of m, like the vertices: fans' centres and cut sides' vertices. */
-void ism_dual_vertex_onto(dual *d, worker *w, double m[3], double size, double out[3]);
+/* The n <= MEASURE_LANES points m[k] (each near f = 0, within size[k] of it) moved onto
+ * f = 0 by Newton and then as a leaf's vertex is (place_vertex: the straddle move) into
+ * out[k] (m is overwritten); NaN there when Newton cannot finish. Newton's gradients in one
+ * batch a step (ism_dual_newton_lanes), the straddle move's jets in one Hessian batch (as
+ * dual.c's place_plain's) for the lanes Newton finished: bit for bit ism_dual_newton_onto
+ * then ism_straddle_balanced_point, one point at a time (test_dual_lanes). A pure function
+ * of m, like the vertices: fans' centres (fan_task) and cut sides' vertices (side_task). */
+void ism_dual_vertices_onto(const dual *d, worker *w, double (*m)[3], const double *size,
+                            size_t n, double (*out)[3]);
 
 /* Marks the leaves of the round's triangles that miss E (miss: ism_dual_measure_triangles'
  * masks of all of them); returns how many leaves can still split and counts the misses at

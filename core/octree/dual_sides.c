@@ -31,20 +31,24 @@
  * 1,984 / 2,024 -> 1,776 / 1,786 triangles, within E as before. */
 #define SIDE_SPLIT_MAX 3.0
 
-/* Task k (job: in the pair keys, out the points): the midpoint of the pair as a vertex
- * (ism_dual_vertex_onto, within the pair's length), as dual_measure.c's fan_task makes a
- * fan's centre. */
+/* Task k (job: in the pair keys, out the points, n how many): the midpoints of the pairs at
+ * in[MEASURE_LANES k ..] as vertices (ism_dual_vertices_onto, each within its pair's
+ * length), as dual_measure.c's fan_task makes fans' centres. */
 static void side_task(void *ctx, size_t k, int thread)
 {
     task_ctx *job = ctx;
     dual *d = job->d;
     worker *w = &d->w[thread];
-    uint64_t key = ((const uint64_t *)job->in)[k];
-    uint32_t a = (uint32_t)((key - 1) >> 32), b = (uint32_t)(key - 1);
-    double m[3], *out = &((double *)job->out)[3 * k];
-    pair_mid(d, key, m);
-    double size = ism_dist3(&d->pos[3 * (size_t)a], &d->pos[3 * (size_t)b]);
-    ism_dual_vertex_onto(d, w, m, size, out);
+    size_t lo, n = chunk_of(k, job->n, &lo);
+    /* size zeroed: n >= 1 of it set, which gcc cannot see (maybe-uninitialized) */
+    double m[MEASURE_LANES][3], size[MEASURE_LANES] = {0}, *out = (double *)job->out;
+    for (size_t j = 0; j < n; j++) {
+        uint64_t key = ((const uint64_t *)job->in)[lo + j];
+        uint32_t a = (uint32_t)((key - 1) >> 32), b = (uint32_t)(key - 1);
+        pair_mid(d, key, m[j]);
+        size[j] = ism_dist3(&d->pos[3 * (size_t)a], &d->pos[3 * (size_t)b]);
+    }
+    ism_dual_vertices_onto(d, w, m, size, n, (double (*)[3])(out + 3 * lo));
 }
 
 /* The misses of a round (miss[t], ism_dual_measure_triangles') as missed sides into *out (sorted by
@@ -137,7 +141,7 @@ static bool side_vertices(dual *d, const ism_edge_ref *s, size_t ns, uint32_t *v
     }
     if (ok && nk) {
         task_ctx job = {d, keys, at, nk};
-        ism_pool_for(d->pool, nk, side_task, &job, NULL);
+        ism_pool_for(d->pool, chunks(nk), side_task, &job, NULL);
     }
     for (size_t k = 0; ok && k < nk; k++)
         ok = !isnan(at[3 * k]);
