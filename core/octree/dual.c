@@ -145,15 +145,12 @@ static void sample_corners(dual *d, worker *w, const int32_t (*q)[3], size_t n, 
 }
 
 /* The room grow leaves for need elements in an array of room cap: what the tree's arrays
- * would hold grown one node at a time (held_bytes' count; expand takes a level's at once). */
+ * would hold grown one node at a time (held_bytes' count; expand takes a level's at once).
+ * Past SIZE_MAX's half, need itself (held_bytes is then past any max_memory anyway). */
 static size_t room_for(size_t cap, size_t need)
 {
-    if (need <= cap)
-        return cap;
-    size_t n = cap ? cap : ISM_DUAL_FIRST_ROOM;
-    while (n < need)
-        n *= 2;
-    return n;
+    size_t n = ism_grow_room(cap, need, ISM_DUAL_FIRST_ROOM);
+    return n ? n : need;
 }
 
 /* Bytes the tree and the vertices hold (the triangles are bounded by max_triangles), the
@@ -712,10 +709,14 @@ static void expand(dual *d, const int32_t *list, size_t n)
         /* the level's room at once (the sag_split vertices' too, where there are any):
            one node at a time, the tree's doublings copied it over and over (sphere at E
            0.00714: 114K instructions of realloc's copying of 7.7M); out of memory here,
-           new_node and keep_at grow node by node */
-        grow((void **)&d->n, &d->capn, d->nn + 8 * n, sizeof *d->n);
+           new_node and keep_at grow node by node. At most the nodes max_memory lets
+           held_bytes count (new_node stops the tree there): the doubling above the level's
+           room could otherwise ask for several times max_memory of address space (revR 5) */
+        size_t room = d->nn + 8 * n, most = d->o->max_memory / sizeof *d->n + 1;
+        room = room < most ? room : most;
+        grow((void **)&d->n, &d->capn, room, sizeof *d->n);
         if (sag_may_split_any(d))
-            grow((void **)&d->at, &d->capat, d->nn + 8 * n, sizeof *d->at);
+            grow((void **)&d->at, &d->capat, room, sizeof *d->at);
         size_t nn = 0;
         for (size_t k = 0; k < n && !d->nomem && !d->too_big; k++) {
             int32_t i = cur[k], first = -1;

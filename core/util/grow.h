@@ -10,19 +10,30 @@
 #include <stdint.h>
 #include <stdlib.h>
 
+/* The capacity ism_grow leaves for need elements in an array of capacity cap (first: the
+ * first allocation's); 0 when the doubling would overflow. Also for counting the room an
+ * array would hold grown so (core/octree/dual.c's held_bytes). */
+static inline size_t ism_grow_room(size_t cap, size_t need, size_t first)
+{
+    if (need <= cap)
+        return cap;
+    size_t n = cap ? cap : (first ? first : 1);
+    while (n < need) {
+        if (n > SIZE_MAX / 2)
+            return 0;
+        n *= 2;
+    }
+    return n;
+}
+
 /* Ensures *cap >= need for an array *p of elements of elem bytes; the first allocation holds
  * `first` elements (or more, when need is larger). */
 static inline bool ism_grow(void **p, size_t *cap, size_t need, size_t elem, size_t first)
 {
     if (need <= *cap)
         return true;
-    size_t n = *cap ? *cap : (first ? first : 1);
-    while (n < need) {
-        if (n > SIZE_MAX / 2)
-            return false;
-        n *= 2;
-    }
-    if (elem && n > SIZE_MAX / elem)
+    size_t n = ism_grow_room(*cap, need, first);
+    if (!n || (elem && n > SIZE_MAX / elem))
         return false;
     void *q = realloc(*p, n * elem);
     if (!q)
