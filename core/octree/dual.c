@@ -89,7 +89,10 @@ static void set_grid(dual *d, const double box[6], int depth)
  * batch — but keeps the finished values, normalised and with the zero taken, so a hit is
  * read as it stands: normalising every point asked for, hits and all, cost the sphere at E
  * 1.3e-3 0.39M instructions of 27.86M (a point's zero test, and its count of an interval
- * where it takes one, then come once a point evaluated, not once a node asking). */
+ * where it takes one, then come once a point evaluated, not once a node asking). q[0..n)
+ * must be distinct lattice points (a split's 27, a root's 8): a miss claims its slot before
+ * its value exists, so a later copy of the same point in one call would read the slot's old
+ * f and g as a hit (revR 8). */
 static void sample_points(dual *d, worker *w, const int32_t (*q)[3], size_t n, double *f,
                           double (*p)[3], double (*g)[3])
 {
