@@ -67,7 +67,9 @@ static inline bool ism_dual_corner_finite(double f, const double n[3])
 }
 
 /* The edges (ism_edges_across' bits, corners.h) of each face of the cube (ism_cube_edges'
- * face numbers). */
+ * face numbers). A constant restating corners.h's ism_cube_edge facts, so that
+ * ism_dual_faces_plain stays an inline test of six masks; test_dual_edges derives each mask
+ * from ism_cube_edge and fails on any difference (revR 6). */
 static const unsigned ISM_DUAL_FACE_EDGES[6] = {0x530, 0xac0, 0x305, 0xc0a, 0x053, 0x0ac};
 
 /* Crossed edges (ism_edges_across) 0 or 2 on every face (one curve): a face's crossed

@@ -30,3 +30,19 @@ Test(dual_edges, crossed_edges_and_plain_faces_match_the_cube_table)
         cr_assert_eq(ism_dual_faces_plain(got), plain, "signs 0x%02x: plain faces", signs);
     }
 }
+
+/* Each face's mask in ISM_DUAL_FACE_EDGES is exactly the edges ism_cube_edge names on it
+ * (revR 6: the table restates corners.h's facts). */
+Test(dual_edges, face_masks_are_the_cube_tables_edges)
+{
+    unsigned want[6] = {0};
+    for (int e = 0; e < 12; e++) {
+        int c0, c1, faces[2];
+        ism_cube_edge(e, &c0, &c1, faces);
+        want[faces[0]] |= 1u << e;
+        want[faces[1]] |= 1u << e;
+    }
+    for (int k = 0; k < 6; k++)
+        cr_assert_eq(ISM_DUAL_FACE_EDGES[k], want[k], "face %d: 0x%03x, the table's 0x%03x", k,
+                     ISM_DUAL_FACE_EDGES[k], want[k]);
+}
