@@ -38,7 +38,10 @@ typedef struct corner_view {
     /* In: 0, classify_head looks at the corners itself; CORNERS_NOT_FINITE, some corner's f
      * or unit ∇f is not finite; else 1 + the count of corners < 0 (split_task reads them
      * off its 27 points' masks, each point looked at once, not once for each child holding
-     * it: sphere at E 1.3e-3, ~720K instructions of classify_head's 3.0M) */
+     * it: sphere at E 1.3e-3, ~720K instructions of classify_head's 3.0M). Every builder
+     * of a view must set it (dual.c's mesh_rounds 0, split_task from the masks): a view
+     * reused for another node with its old count is classified by that count, unchecked
+     * (test_dual_pre compares both paths). */
     uint8_t corners;
     /* In (classify_tail): f and ∇f's natural enclosure over the box is in g already, taken
      * in one batch with the node's siblings' (kid_kinds); classify_head clears it. */

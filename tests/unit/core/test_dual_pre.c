@@ -80,12 +80,30 @@ static void make_node(rig *r, const int32_t q[3], int level, dnode *n, corner_vi
     v->foot = FOOT_UNKNOWN;
 }
 
-/* The children of the node at q, level, both ways; returns how many children took a model
- * made at once. */
+/* corner_view.corners as split_task hands it over from its 27 points' masks (revR 7): from
+ * the node's corners here, each looked at once: CORNERS_NOT_FINITE when some f or unit
+ * gradient is not finite, else 1 + how many f < 0. */
+static uint8_t corner_count(const dnode *n, const corner_view *v)
+{
+    int neg = 0;
+    for (int c = 0; c < 8; c++) {
+        bool finite = isfinite(n->f[c]);
+        for (int a = 0; a < 3; a++)
+            finite &= isfinite(v->n[c][a]) != 0;
+        if (!finite)
+            return CORNERS_NOT_FINITE;
+        neg += n->f[c] < 0;
+    }
+    return (uint8_t)(1 + neg);
+}
+
+/* The children of the node at q, level, both ways — and a third, with corner_view.corners
+ * set beforehand (split_task's path) instead of 0 (classify_head counting them): the same
+ * kinds; returns how many children took a model made at once. */
 static int compare_children(rig *r, const int32_t q[3], int level, int placement)
 {
-    dnode kids[8], alone[8];
-    corner_view views[8], solo[8];
+    dnode kids[8], alone[8], preset[8];
+    corner_view views[8], solo[8], counted[8];
     int half = ism_grid_cell_steps(&r->d.g, level + 1), kind[8], at[8], nb = 0;
     for (int c = 0; c < 8; c++) {
         int32_t k[3] = {q[0] + (c & 1) * half, q[1] + (c >> 1 & 1) * half,
@@ -93,6 +111,9 @@ static int compare_children(rig *r, const int32_t q[3], int level, int placement
         make_node(r, k, level + 1, &kids[c], &views[c]);
         alone[c] = kids[c];
         solo[c] = views[c];
+        preset[c] = kids[c];
+        counted[c] = views[c];
+        counted[c].corners = corner_count(&kids[c], &views[c]);
     }
     /* kid_kinds' order */
     ism_interval box[8][3];
@@ -123,6 +144,15 @@ static int compare_children(rig *r, const int32_t q[3], int level, int placement
         cr_assert_eq(kind[c], want, "placement %d, level %d node (%d %d %d) child %d: %d at once, "
                                     "%d alone",
                      placement, level, q[0], q[1], q[2], c, kind[c], want);
+        int given = ism_dual_classify(&r->d, &r->w, &preset[c], &counted[c]);
+        cr_assert_eq(given, want, "placement %d, level %d node (%d %d %d) child %d: %d with "
+                                  "the corners counted beforehand (%d), %d counting them",
+                     placement, level, q[0], q[1], q[2], c, given, counted[c].corners, want);
+        /* and the count is what is read: a view saying "not finite" is split unlooked at */
+        dnode bad = kids[c];
+        corner_view nf = solo[c];
+        nf.corners = CORNERS_NOT_FINITE;
+        cr_assert_eq(ism_dual_classify(&r->d, &r->w, &bad, &nf), DN_INNER);
         cr_assert_eq(views[c].have_model, solo[c].have_model,
                      "placement %d, level %d node (%d %d %d) child %d: have_model", placement,
                      level, q[0], q[1], q[2], c);
