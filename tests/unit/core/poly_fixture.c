@@ -434,6 +434,11 @@ const pf_surface pf_barth_sextic = {
     "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2, x^2 + y^2 + z^2 - 2.25)",
     barth_phi, 1, NULL, 0};
 
+static const ism_param gyroid_k[] = {{"k", 4}};
+const pf_surface pf_gyroid_ball = {
+    "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
+    gyroid_k, 1, NULL, 0};
+
 double pf_unit_sphere_dist(const double p[3])
 {
     return fabs(sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) - 1);

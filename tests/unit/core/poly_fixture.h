@@ -138,6 +138,10 @@ double pf_ring_torus_dist(const double p[3]);
  * barth-sextic, a locus of nodes and a min/max crease where the sextic meets the sphere. */
 extern const pf_surface pf_barth_sextic;
 
+/* The gyroid sin(kx)cos(ky) + sin(ky)cos(kz) + sin(kz)cos(kx), k = 4, cut by the ball
+ * r² ≤ 1.96 through max(): bench_error's gyroid-ball, a trig tape with a min/max crease. */
+extern const pf_surface pf_gyroid_ball;
+
 /* Distance from p to f = 0 by Newton's projection (the last iterate's distance plus its
  * |f| / |∇f| when it does not settle: an over-estimate). */
 double pf_newton_dist(const ism_tape *t, ism_eval_ws *ws, const double p[3]);

@@ -207,9 +207,6 @@ Test(curves, torus_z0)
 #include "core/eval/eval.h"
 
 static const ism_param gyroid_k[] = {{"k", 4}};
-static const pf_surface gyroid_ball = {
-    "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
-    gyroid_k, 1, NULL, 0};
 static const pf_surface gyroid_alone = {
     "sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x)", gyroid_k, 1, NULL, 0};
 
@@ -392,14 +389,14 @@ static void gyroid_crease(int which)
     const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
     double box[6];
     shifted(base, which, 7, box);
-    ism_tape *f = pf_compile(&gyroid_ball), *gy = pf_compile(&gyroid_alone);
+    ism_tape *f = pf_compile(&pf_gyroid_ball), *gy = pf_compile(&gyroid_alone);
     ism_cut_fn crease;
     cr_assert(ism_cut_crease_fn(f, &crease));
     ism_tape_free(f);
     cut_run r;
     ism_mesh_init(&r.m);
     {
-        ism_tape *t = pf_compile(&gyroid_ball);
+        ism_tape *t = pf_compile(&pf_gyroid_ball);
         ism_poly_options o;
         ism_poly_options_default(&o);
         memcpy(o.box, box, sizeof o.box);
@@ -471,7 +468,7 @@ static void gyroid_crease(int which)
     qsort(et, 3 * r.m.ntris, sizeof *et, cmp_edge_tri);
     float *cn = malloc(9 * r.m.ntris * sizeof *cn);
     {
-        ism_tape *t = pf_compile(&gyroid_ball);
+        ism_tape *t = pf_compile(&pf_gyroid_ball);
         cr_assert(ism_crease_corner_normals(t, &r.m, &r.cut, cn));
         ism_tape_free(t);
     }

@@ -15,13 +15,6 @@
 #define MAX_TILES 4096 /* a face's tiles: at most 4^(MAX_DEPTH) leaves, far fewer in practice */
 #define HALF 1.5       /* the base box ±1.5 holds both surfaces */
 
-static const ism_param torus_rr[] = {{"R", 1}, {"r", 0.3}};
-static const pf_surface torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
-                                 torus_rr, 2, NULL, 0};
-static const ism_param gyroid_k[] = {{"k", 4}};
-static const pf_surface gyroid = {
-    "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
-    gyroid_k, 1, NULL, 0};
 
 typedef struct tile_list {
     ism_tile v[MAX_TILES];
@@ -111,10 +104,10 @@ static size_t compare(const pf_surface *s)
 
 Test(face_tiles, torus_from_the_parent_as_from_the_root)
 {
-    cr_assert_gt(compare(&torus), 100);
+    cr_assert_gt(compare(&pf_ring_torus), 100);
 }
 
 Test(face_tiles, gyroid_ball_from_the_parent_as_from_the_root)
 {
-    cr_assert_gt(compare(&gyroid), 100);
+    cr_assert_gt(compare(&pf_gyroid_ball), 100);
 }

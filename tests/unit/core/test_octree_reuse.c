@@ -21,13 +21,6 @@
  * build's gradients (it did: the bound was 0.5); the gyroid ball and the thin torus lower. */
 #define REUSE_GRADIENTS 0.6
 
-static const ism_param torus_rr[] = {{"R", 1}, {"r", 0.3}};
-static const pf_surface torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
-                                 torus_rr, 2, NULL, 0};
-static const ism_param gyroid_k[] = {{"k", 4}};
-static const pf_surface gyroid = {
-    "max(sin(k*x)*cos(k*y) + sin(k*y)*cos(k*z) + sin(k*z)*cos(k*x), x^2 + y^2 + z^2 - 1.96)",
-    gyroid_k, 1, NULL, 0};
 /* tube radius 0.26 of a depth-7 cell: only the hidden-piece search sees most of it */
 static const ism_param thin_rr[] = {{"R", 1}, {"r", 0.006}};
 static const pf_surface thin_torus = {"(x^2 + y^2 + z^2 + R^2 - r^2)^2 - 4*R^2*(x^2 + y^2)",
@@ -171,13 +164,13 @@ static void check(const pf_surface *s, const run_case *cases, size_t ncases, boo
 Test(octree_reuse, torus_tree_as_a_fresh_build)
 {
     static const run_case cases[] = {{0, 1, 0}, {1e-3, 2, 0}, {PF_IRR, 2, THIN_LEVELS}};
-    check(&torus, cases, sizeof cases / sizeof cases[0], false);
+    check(&pf_ring_torus, cases, sizeof cases / sizeof cases[0], false);
 }
 
 Test(octree_reuse, gyroid_ball_tree_as_a_fresh_build)
 {
     static const run_case cases[] = {{PF_IRR, 2, THIN_LEVELS}}; /* the costly one: one box */
-    check(&gyroid, cases, sizeof cases / sizeof cases[0], false);
+    check(&pf_gyroid_ball, cases, sizeof cases / sizeof cases[0], false);
 }
 
 /* Split below depth.max where hidden pieces were found: the next round must split the same
@@ -203,7 +196,7 @@ Test(octree_reuse, torus_with_node_balls_grows_every_node)
     node_balls = (const double (*)[ISM_NODE_BALL_FIELDS])balls;
     nnode_balls = 2;
     static const run_case cases[] = {{0, 1, 0}, {1e-3, 2, 0}, {PF_IRR, 2, 0}};
-    check(&torus, cases, sizeof cases / sizeof cases[0], false);
+    check(&pf_ring_torus, cases, sizeof cases / sizeof cases[0], false);
     node_balls = NULL;
     nnode_balls = 0;
 }
@@ -214,7 +207,7 @@ Test(octree_reuse, torus_with_node_balls_grows_every_node)
  * tree, box off the lattice. */
 Test(octree_reuse, node_key_decodes_and_path_descends)
 {
-    ism_tape *t = pf_compile(&torus);
+    ism_tape *t = pf_compile(&pf_ring_torus);
     ism_octree tree;
     ism_octree_build_stats st;
     build(t, PF_IRR * 3.0 / (1 << MAX_DEPTH), MAX_DEPTH, 1, NULL, NULL, &tree, &st);
