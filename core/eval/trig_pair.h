@@ -51,8 +51,8 @@ typedef struct ism_trig_entry {
  * and kz, six steps on three registers), and a register's pair is computed once.
  * ISM_TRIG_GROUP_PAIRS registers: the gyroid's three, and one more (a power of two: the round
  * robin's index is masked). ISM_TRIG_GROUP_LANES: ISM_GRAD_BATCH's and a group of
- * ism_eval_batch's (asserted there). Gyroid ball at E = 1e-3 (callgrind, as above): the whole run 2,741.8M instructions
- * without them, ~2,703M with. */
+ * ism_eval_batch's (asserted there). Gyroid ball at E = 1e-3 (callgrind, as above): the whole run
+ * 2,741.8M instructions without them, ~2,703M with. */
 #define ISM_TRIG_GROUP_PAIRS 4
 #define ISM_TRIG_GROUP_LANES 32
 

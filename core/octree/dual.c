@@ -490,8 +490,8 @@ static void feet_task(void *ctx, size_t k, int thread)
 
 /* leaf_kind of the children kids[0..8) of a split node (views: their corners) into kind:
  * every child's classify_head first (but those in empty, bit c: child c found DN_EMPTY by
- * split_task from the masks, its view not made), then the natural enclosures the undecided ones' tails
- * take in one batch (bit for bit the box-by-box pass's, its records kept for the Taylor
+ * split_task from the masks, its view not made), then the natural enclosures the undecided ones'
+ * tails take in one batch (bit for bit the box-by-box pass's, its records kept for the Taylor
  * models' jets over the same boxes: classify_tail takes them from v->g), then the Taylor
  * models of those whose tails will tighten made at once (ism_dual_pre_models; when it runs,
  * its centre batch, ism_eval_interval_grad_batch, resets the records of the siblings it did
@@ -841,8 +841,8 @@ static void lane_feet(worker *w, const double (*lo)[3], const double (*hi)[3],
  * 3,108 / 8,220, torus 3,280 / 5,968 / 20,464 -> 3,536 / 5,792 / 17,472 (-9% over the six).
  * The one routine for these steps, each in lanes: the centres' feet not taken yet
  * (ism_dual_feet_in_nodes), then Newton from the secant roots' mean for those whose foot
- * left the leaf (ism_dual_newton_lanes), then f's jets at the points in one batch for the straddle move
- * (ism_eval_hessian_batch, as feet_task's). One by one, Newton's gradients and the Hessian
+ * left the leaf (ism_dual_newton_lanes), then f's jets at the points in one batch for the straddle
+ * move (ism_eval_hessian_batch, as feet_task's). One by one, Newton's gradients and the Hessian
  * cost ~1,040 instructions each a leaf (sphere at 0.00714: 120 leaves whose foot left
  * them). */
 static void place_plain(dual *d, worker *w, const int32_t *leaf, size_t n)

@@ -186,7 +186,8 @@ static inline size_t chunks(size_t n)
 
 /* Two helpers that read no tree, here because a second part borrows them. */
 /* m moved onto f = 0 by Newton along ∇f, stopping once a step is below NEWTON_STOP of
- * size (dual_classify.c's; its lanes are ism_dual_newton_lanes); false when it could not finish a step (∇f vanishing or not finite). */
+ * size (dual_classify.c's; its lanes are ism_dual_newton_lanes); false when it could not finish a
+ * step (∇f vanishing or not finite). */
 bool ism_dual_newton_onto(worker *w, double m[3], double size);
 /* ism_dual_newton_onto for the n <= ISM_GRAD_BATCH points m[k] (each by its size[k]) at
  * once, each step's gradients in one batch (ism_sample_grad_batch: bit for bit the scalar

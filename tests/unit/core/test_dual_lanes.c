@@ -155,8 +155,8 @@ static bool same_or_nan3(const double a[3], const double b[3])
     return true;
 }
 
-/* A vertex from m (within size of f = 0) alone: Newton onto f = 0 (NaN when it cannot finish), then, shift > 0, the
- * balanced straddle move, the jet taken at the point itself. */
+/* A vertex from m (within size of f = 0) alone: Newton onto f = 0 (NaN when it cannot finish),
+ * then, shift > 0, the balanced straddle move, the jet taken at the point itself. */
 static void one_vertex(worker *w, double shift, const double box[6], double m[3], double size,
                        double out[3])
 {

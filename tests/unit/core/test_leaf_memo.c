@@ -7,7 +7,8 @@
  * some axis (an edge segment or a face), is -1; every other leaf, corner-only neighbours
  * included, keeps its index among the old tree's leaves. Each case asserts it has leaves
  * touching the split one at a corner alone, along an edge alone and across a face; the small
- * leaf's split has the big leaf among its corner-only neighbours. Only lattice indices enter, so the box's placement cannot matter. */
+ * leaf's split has the big leaf among its corner-only neighbours. Only lattice indices enter, so
+ * the box's placement cannot matter. */
 #include <criterion/criterion.h>
 #include <stdlib.h>
 #include <string.h>
