@@ -33,6 +33,8 @@ static int by_edge(const void *x, const void *y)
  * was taken over in between logs the same root again: both sides must agree on that). */
 static size_t distinct(ism_root_log *l)
 {
+    if (!l->n)
+        return 0; /* l->v may be NULL (qsort's base must not be) */
     qsort(l->v, l->n, sizeof *l->v, by_edge);
     size_t m = 0;
     for (size_t i = 0; i < l->n; i++) {
@@ -51,13 +53,16 @@ static size_t distinct(ism_root_log *l)
 static size_t stale_slots(const ism_root_entry *memo, size_t nroots, const ism_root_log *log,
                           ism_root_entry *sorted)
 {
-    memcpy(sorted, log->v, log->n * sizeof *sorted);
-    qsort(sorted, log->n, sizeof *sorted, by_edge);
+    size_t n = log->n; /* 0 when a chunk's prefetch searched nothing: log->v may be NULL */
+    if (n) {
+        memcpy(sorted, log->v, n * sizeof *sorted);
+        qsort(sorted, n, sizeof *sorted, by_edge);
+    }
     size_t bad = 0;
     for (size_t i = 0; i < nroots; i++) {
         if (!memo[i].a)
             continue;
-        const ism_root_entry *e = bsearch(&memo[i], sorted, log->n, sizeof *sorted, by_edge);
+        const ism_root_entry *e = n ? bsearch(&memo[i], sorted, n, sizeof *sorted, by_edge) : NULL;
         bad += !e || memcmp(&e->t, &memo[i].t, sizeof(double)) != 0;
     }
     return bad;
