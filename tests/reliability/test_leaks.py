@@ -132,12 +132,12 @@ def run_mix(t, d):
     return th, box
 
 
-def check_last_answer(t, th, box):
+def check_last_answer(t, th, box, story=""):
     """The computation running at SIGTERM was answered: finished in the grace period, or 503."""
     th.join(60)
     t.assertIn("last", box, "the request running at SIGTERM got no answer: %s"
                % box.get("last_error"))
-    t.assertIn(box["last"][0], (200, 503))
+    t.assertIn(box["last"][0], (200, 503), "%r\n%s" % (box["last"][2][:400], story))
 
 
 class LeakTest(unittest.TestCase):
@@ -166,8 +166,8 @@ class LeakTest(unittest.TestCase):
             d.start()
             th, box = run_mix(self, d)
             rc = d.stop(timeout=60)
-            check_last_answer(self, th, box)
             log = d.log()
+            check_last_answer(self, th, box, d.story(80))
         finally:
             d.cleanup()
         self.assertNotIn("LeakSanitizer", log)
@@ -185,8 +185,8 @@ class LeakTest(unittest.TestCase):
             d.start(timeout=120)
             th, box = run_mix(self, d)
             rc = d.stop(timeout=120)
-            check_last_answer(self, th, box)
             log = d.log()
+            check_last_answer(self, th, box, d.story(80))
         finally:
             d.cleanup()
         with open(vlog) as f:
