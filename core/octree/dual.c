@@ -48,6 +48,31 @@
  * ∇f at lattice points, so what the memo holds changes no mesh. */
 #define DUAL_POINT_MIN_BITS 11
 #define DUAL_POINT_ENTRIES_PER_NODE 4
+
+/* The point memo's entries are not cleared: a bit a slot (worker.filled) says which hold a
+ * point, and only those bits are (2^bits / 8 bytes). calloc clearing the 80 KB of the
+ * first table was 82K of the sphere's 2.13M instructions at E 0.0141 (bench_error under
+ * callgrind: memset counts a byte an instruction); the bit costs a test a look-up. */
+static inline bool point_filled(const worker *w, size_t i)
+{
+    return w->filled[i >> 6] >> (i & 63) & 1;
+}
+
+/* Room for a memo of 2^bits entries (uncleared) and its bits (cleared) into *points and
+ * *filled; false (nothing held) when out of memory. */
+static bool points_alloc(int bits, ism_point_entry **points, uint64_t **filled)
+{
+    size_t n = (size_t)1 << bits; /* bits >= DUAL_POINT_MIN_BITS: whole words of bits */
+    *points = malloc(n * sizeof **points);
+    *filled = calloc(n / 64, sizeof **filled);
+    if (*points && *filled)
+        return true;
+    free(*points);
+    free(*filled);
+    *points = NULL;
+    *filled = NULL;
+    return false;
+}
 /* children_free's batches are made while the children they showed free (each spared the
  * interval of f and ∇f, 2-3x a batch's cost) are at least this many per batch so far (the
  * first split pass past min_depth always batches). With every batch made: kummer-16-nodes
@@ -98,18 +123,20 @@ static void sample_points(dual *d, worker *w, const int32_t (*q)[3], size_t n, d
 {
     ism_point_entry *slot[ISM_POINT_MEMO_MANY];
     uint64_t key[ISM_POINT_MEMO_MANY], mask = ((uint64_t)1 << w->bits) - 1;
-    size_t miss[ISM_POINT_MEMO_MANY], nm = 0;
+    size_t miss[ISM_POINT_MEMO_MANY], at[ISM_POINT_MEMO_MANY], nm = 0;
     for (size_t j = 0; j < n; j++) { /* the slots asked for at once: their misses overlap */
         key[j] = ism_lattice_key(q[j]);
-        slot[j] = &w->points[ism_cache_mix(key[j]) & mask];
+        at[j] = ism_cache_mix(key[j]) & mask;
+        slot[j] = &w->points[at[j]];
         __builtin_prefetch(slot[j], 1);
     }
     for (size_t j = 0; j < n; j++) {
-        if (slot[j]->key == key[j]) {
+        if (point_filled(w, at[j]) && slot[j]->key == key[j]) {
             f[j] = slot[j]->f;
             memcpy(g[j], slot[j]->g, sizeof g[j]);
             continue;
         }
+        w->filled[at[j] >> 6] |= (uint64_t)1 << (at[j] & 63);
         slot[j]->key = key[j];
         miss[nm++] = j;
     }
@@ -661,17 +688,24 @@ static bool points_for(dual *d, size_t nodes)
         worker *w = &d->w[k];
         if (w->bits >= bits)
             continue;
-        ism_point_entry *grown = calloc((size_t)1 << bits, sizeof *grown);
-        if (!grown) {
+        ism_point_entry *grown;
+        uint64_t *filled;
+        if (!points_alloc(bits, &grown, &filled)) {
             d->nomem = true;
             return false;
         }
         uint64_t mask = ((uint64_t)1 << bits) - 1;
-        for (size_t i = 0; i < (size_t)1 << w->bits; i++)
-            if (w->points[i].key)
-                grown[ism_cache_mix(w->points[i].key) & mask] = w->points[i];
+        for (size_t wd = 0; wd < ((size_t)1 << w->bits) / 64; wd++) /* a word of bits at once */
+            for (uint64_t b = w->filled[wd]; b; b &= b - 1) {
+                size_t i = 64 * wd + (size_t)__builtin_ctzll(b);
+                size_t j = ism_cache_mix(w->points[i].key) & mask;
+                grown[j] = w->points[i];
+                filled[j >> 6] |= (uint64_t)1 << (j & 63);
+            }
         free(w->points);
+        free(w->filled);
         w->points = grown;
+        w->filled = filled;
         w->bits = bits;
     }
     return true;
@@ -1346,9 +1380,11 @@ static enum ism_dual_status run_in_grown_box(dual *d, ism_mesh *mesh, ism_dual_s
     d->inner = given->box;
     set_grid(d, grown.box, grown.max_depth);
     for (int k = 0; k < d->nw; k++) {
-        memset(d->w[k].points, 0, ((size_t)1 << d->w[k].bits) * sizeof *d->w[k].points);
+        memset(d->w[k].filled, 0, ((size_t)1 << d->w[k].bits) / 64 * sizeof *d->w[k].filled);
         free(d->w[k].pairs);
+        free(d->w[k].pairs_filled);
         d->w[k].pairs = NULL;
+        d->w[k].pairs_filled = NULL;
         d->w[k].pairs_tried = false;
     }
     forget(d);
@@ -1419,11 +1455,11 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         w->s.batch = !o->scalar_eval; /* the measure's gradients in batches */
         w->jet = ism_ivjet_ws_new(f);
         w->bits = DUAL_POINT_MIN_BITS;
-        w->points = calloc((size_t)1 << w->bits, sizeof *w->points);
+        bool memo = points_alloc(w->bits, &w->points, &w->filled);
         size_t len = ism_tape_length(f);
         if (d.crease)
             w->force = calloc(len ? len : 1, 1);
-        ok = w->s.ws && w->jet && w->points && (!d.crease || w->force);
+        ok = w->s.ws && w->jet && memo && (!d.crease || w->force);
     }
     /* a box whose faces f is seen to cross is grown at once (dual_box.h); one that cuts the
      * surface only between the face samples is found by the tree (box_cut), then grown */
@@ -1442,7 +1478,9 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
         ism_eval_ws_free(w->s.ws);
         ism_ivjet_ws_free(w->jet);
         free(w->points);
+        free(w->filled);
         free(w->pairs);
+        free(w->pairs_filled);
         free(w->force);
     }
     if (status != ISM_DUAL_OK)

@@ -86,9 +86,9 @@ static bool measure_pairs(dual *d, const uint32_t *pairs, size_t n, double *out)
         uint64_t key = pair_key(pairs[2 * j], pairs[2 * j + 1]);
         size_t i = keyed_slot(k, key);
         at[j] = i; /* slots stay put till the end (reserved) */
-        if (k->key[i])
+        if (keyed_used(k, i))
             continue;
-        k->key[i] = key; /* asked for: not again in this batch; no growth till the end */
+        keyed_claim(k, i, key); /* asked for: not again in this batch; no growth till the end */
         k->val[i] = NAN;
         k->n++;
         keys[m] = key;

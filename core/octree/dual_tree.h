@@ -82,10 +82,12 @@ typedef struct worker {
     ism_sampler s;
     ism_ivjet_ws *jet;
     ism_point_entry *points;
+    uint64_t *filled; /* bit i: points[i] holds a point (only this is cleared, not points) */
     int bits; /* points holds 2^bits entries */
     /* Same-sign edges' root searches (same_sign_edge_clear), made on the first search only
      * (a sphere never searches: no 128 KB to fault in); NULL: none yet, or no memory. */
     ism_pair_entry *pairs; /* 2^ISM_PAIR_MEMO_BITS entries (cell_cache.h), or NULL */
+    uint64_t *pairs_filled; /* bit i: pairs[i] holds a search (only this is cleared) */
     bool pairs_tried;
     uint8_t *force; /* with a crease: a tape-length zeroed buffer, the top's branch forced by
                        dual_crease.c's enclosures (ism_dual_crease_node); else NULL */
