@@ -61,23 +61,26 @@ static void pair_task(void *ctx, size_t k, int thread)
         pair_mid(d, keys[lo + j], m[j]);
     ism_sample_grad_batch(&w->s, (const double (*)[3])m, f, g, n);
     ism_plain_dists(&w->s, (const double (*)[3])m, f, (const double (*)[3])g, e, plain, n);
-    for (size_t j = 0; j < n; j++) /* ism_dual_dist's */
-        dist[lo + j] = ism_dual_kink_dist(&w->s, m[j], plain[j], e);
+    if (!ism_tape_top_minmax(w->s.tape)) /* ism_dual_dist's, its first test once a task */
+        memcpy(&dist[lo], plain, n * sizeof *plain);
+    else
+        for (size_t j = 0; j < n; j++)
+            dist[lo + j] = ism_dual_kink_dist_near(&w->s, m[j], plain[j], e);
 }
 
 /* The midpoint distances of the n vertex pairs in pairs[0..2n) into the memo: those not
  * known yet, each once, measured on the pool; and every pair's into out[0..n) (out NULL:
  * none). False (nothing measured) when out of memory. */
+_Static_assert(sizeof(size_t) == sizeof(uint64_t), "measure_pairs' block: 8-byte slots");
+
 static bool measure_pairs(dual *d, const uint32_t *pairs, size_t n, double *out)
 {
-    uint64_t *keys = malloc((n ? n : 1) * sizeof *keys);
-    size_t *slot = malloc((n ? n : 1) * sizeof *slot), *at = malloc((n ? n : 1) * sizeof *at);
-    double *dist = malloc((n ? n : 1) * sizeof *dist);
-    if (!keys || !slot || !at || !dist || !keyed_reserve(&d->mid, n)) {
+    size_t room = n ? n : 1; /* keys, slot, at and dist in one block (8 bytes each) */
+    uint64_t *keys = malloc(4 * room * sizeof *keys);
+    size_t *slot = (size_t *)(keys + room), *at = slot + room;
+    double *dist = (double *)(at + room);
+    if (!keys || !keyed_reserve(&d->mid, n)) {
         free(keys);
-        free(slot);
-        free(at);
-        free(dist);
         return false; /* mid_dist measures them one by one */
     }
     size_t m = 0;
@@ -101,9 +104,6 @@ static bool measure_pairs(dual *d, const uint32_t *pairs, size_t n, double *out)
     for (size_t j = 0; out && j < n; j++) /* mid_dist's answer, without its look-up */
         out[j] = k->val[at[j]];
     free(keys);
-    free(slot);
-    free(at);
-    free(dist);
     return true;
 }
 
@@ -204,18 +204,19 @@ static int clip_of(const dual *d, size_t t)
  * edges pass, measured on the pool, and are remembered when they pass. */
 void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *miss)
 {
-    size_t np = 0, nc = 0;
-    uint32_t *open = malloc((n ? n : 1) * sizeof *open);
-    uint32_t *pairs = malloc((n ? n : 1) * 6 * sizeof *pairs);
-    uint32_t *cen = malloc((n ? n : 1) * sizeof *cen);
-    size_t *at = malloc((n ? n : 1) * sizeof *at);
-    uint64_t *tkey = malloc((n ? n : 1) * sizeof *tkey); /* the open triangles' tri_key */
-    uint8_t *emiss = malloc(n ? n : 1), *cmiss = malloc(n ? n : 1);
-    double *pdist = malloc((n ? n : 1) * 3 * sizeof *pdist); /* NULL: mid_dist looks up */
-    if (!open || !pairs || !cen || !at || !tkey || !emiss || !cmiss) {
+    size_t np = 0, nc = 0, room = n ? n : 1;
+    /* one block: at, tkey (the open triangles' tri_key) and pdist (8 bytes each: 5 room),
+       open, pairs and cen (4 bytes: 8 room), emiss and cmiss (2 room) */
+    size_t *at = malloc(74 * room);
+    uint64_t *tkey = (uint64_t *)(at + room);
+    double *pdist = (double *)(tkey + room);
+    uint32_t *open = (uint32_t *)(pdist + 3 * room), *pairs = open + room, *cen = pairs + 6 * room;
+    uint8_t *emiss = (uint8_t *)(cen + room), *cmiss = emiss + room;
+    if (!at) {
         d->nomem = true;
-        goto done;
+        return;
     }
+    pairs[0] = 0; /* GCC cannot see that measure_pairs reads only what the loop writes */
     for (size_t k = 0; k < n; k++) {
         uint32_t t = list ? list[k] : (uint32_t)k;
         uint64_t key = tri_key(d, t);
@@ -224,13 +225,12 @@ void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t
             continue;
         at[np] = k;
         tkey[np] = key;
+        const uint32_t *v = &d->tri[3 * (size_t)t];
+        uint32_t *e = &pairs[6 * np]; /* edges 0-1, 1-2, 2-0 */
+        e[0] = v[0], e[1] = v[1], e[2] = v[1], e[3] = v[2], e[4] = v[2], e[5] = v[0];
         open[np++] = t;
-        for (int e = 0; e < 3; e++) {
-            pairs[6 * (np - 1) + 2 * e] = d->tri[3 * t + e];
-            pairs[6 * (np - 1) + 2 * e + 1] = d->tri[3 * t + (e + 1) % 3];
-        }
     }
-    bool known = pdist && measure_pairs(d, pairs, 3 * np, pdist);
+    bool known = measure_pairs(d, pairs, 3 * np, pdist);
     for (size_t k = 0; k < np; k++) {
         emiss[k] = (uint8_t)edge_misses(d, open[k], known ? &pdist[3 * k] : NULL);
         if (!emiss[k])
@@ -250,15 +250,7 @@ void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t
         if (!m && tkey[k])
             keyed_put(&d->passed, tkey[k], 0); /* out of memory: measured again, no more */
     }
-done:
-    free(open);
-    free(pairs);
-    free(cen);
     free(at);
-    free(tkey);
-    free(emiss);
-    free(cmiss);
-    free(pdist);
 }
 
 /* Marks leaf (a leaf not yet split, above depth.max) to split; true when it can. */

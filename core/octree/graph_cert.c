@@ -25,11 +25,14 @@ static int slope_sign(const ism_ivgrad *g, const double d[3])
     for (int a = 0; a < 3; a++) {
         if (!isfinite(g->d[a].lo) || !isfinite(g->d[a].hi))
             return 0;
-        big += fmax(fabs(g->d[a].lo), fabs(g->d[a].hi)) * fabs(d[a]);
+        /* fmin / fmax as comparisons (no NaN here; a zero's sign cannot change a sum's
+           comparison): libm's are calls, 1,536 of fmax on the sphere at E 0.0141 */
+        double al = fabs(g->d[a].lo), ah = fabs(g->d[a].hi);
+        big += (al > ah ? al : ah) * fabs(d[a]);
         /* the enclosure of ∇f · d over the box: each term's interval scaled by d[a] */
         double p = g->d[a].lo * d[a], q = g->d[a].hi * d[a];
-        low += fmin(p, q);
-        high += fmax(p, q);
+        low += p < q ? p : q;
+        high += p > q ? p : q;
     }
     double margin = MIN_SLOPE_FRACTION * big;
     return !(big > 0) ? 0 : low > margin ? 1 : high < -margin ? -1 : 0;
