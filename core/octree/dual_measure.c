@@ -15,7 +15,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-static bool add_tri(dual *d, uint32_t a, uint32_t b, uint32_t c)
+/* Inline: emit_quads adds every triangle of a round, ~1,000 calls on the sphere at E 0.0141
+ * (their calls ~9K instructions of 1.91M). */
+static inline __attribute__((always_inline)) bool add_tri(dual *d, uint32_t a, uint32_t b,
+                                                          uint32_t c)
 {
     if (!grow((void **)&d->tri, &d->capt, d->nt + 1, 3 * sizeof *d->tri))
         return false;
@@ -517,8 +520,11 @@ void ism_dual_emit_quads(dual *d)
         uint32_t pairs[4] = {u[0], u[2], u[1], u[3]};
         memcpy(&diag[4 * nd++], pairs, sizeof pairs);
     }
-    /* the diagonals' distances as measured (NULL: mid_dist looks them up) */
-    if (!ok || !ddist || !measure_pairs(d, diag, 2 * nd, ddist)) {
+    /* the diagonals' distances as measured (NULL: mid_dist looks them up); the pair memo's
+       room for them and for their triangles' 6 pairs a quad at once (one growth, not two:
+       measure_pairs reserves for each call's pairs in turn) */
+    if (!ok || !ddist || !keyed_reserve(&d->mid, 8 * nd) ||
+        !measure_pairs(d, diag, 2 * nd, ddist)) {
         free(ddist);
         ddist = NULL;
     }
