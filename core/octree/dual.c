@@ -192,8 +192,10 @@ static size_t held_bytes(const dual *d)
            d->capv * (3 * sizeof *d->pos + sizeof *d->vleaf + sizeof *d->vtwin);
 }
 
-/* A new node, or false when out of memory or past o->max_memory (too_big set). */
-static bool new_node(dual *d, ism_ipt o, int level, int32_t *out)
+/* A new node, or false when out of memory or past o->max_memory (too_big set). Inline:
+ * expand makes every node (1,929 calls on the torus at E 0.0141). */
+static inline __attribute__((always_inline)) bool new_node(dual *d, ism_ipt o, int level,
+                                                           int32_t *out)
 {
     if (held_bytes(d) > d->o->max_memory) {
         d->too_big = true;

@@ -544,7 +544,8 @@ enum { STEP_FAIL, STEP_GO, STEP_STOP };
  * moving m when ∇f vanishes or f, ∇f are not finite; else m moved, and STEP_STOP once the
  * step was below NEWTON_STOP of size. ism_dual_newton_onto and ism_dual_newton_lanes both
  * step so. */
-static int newton_step(double m[3], double f, const double g[3], double size)
+static inline __attribute__((always_inline)) int newton_step(double m[3], double f,
+                                                             const double g[3], double size)
 {
     double gg = ism_dot3(g, g);
     if (!isfinite(f) || !(gg > 0) || !isfinite(gg))
