@@ -72,10 +72,10 @@ static bool emit_zero_tile(face_walk *w, const ism_tile *tile)
     return ok;
 }
 
-static bool on_tile(face_walk *w, const ism_tile *tile)
+static bool on_tile(face_walk *w, const ism_node_tile *nt)
 {
     w->tiles++;
-    if (!ism_tile_lines(w->cx, tile) || (w->cx->zero_tile && !emit_zero_tile(w, tile)))
+    if (!ism_tile_lines(w->cx, nt) || (w->cx->zero_tile && !emit_zero_tile(w, &nt->t)))
         w->ok = false;
     return w->ok;
 }
@@ -85,7 +85,7 @@ static bool keep_tile(void *ctx, const ism_tile *tile)
     ism_cell_ctx *cx = ctx;
     if (!ism_grow((void **)&cx->tiles, &cx->cap_tiles, cx->ntiles + 1, sizeof *cx->tiles, 32))
         return false;
-    cx->tiles[cx->ntiles++] = *tile;
+    cx->tiles[cx->ntiles++].t = *tile; /* key and hash: ism_tile_prefetch */
     return true;
 }
 
@@ -98,8 +98,8 @@ static bool whole_face(const ism_tile *t, int32_t s)
 }
 
 /* The tiles of the node's six faces into cx->tiles, face f's from first[f] to first[f + 1],
- * each asked for from memory (ism_tile_prefetch) before any is walked: the node's 8 corners
- * once, the corners of finer tiles with them. */
+ * each asked for from memory (ism_tile_prefetch, which also keys it) before any is walked:
+ * the node's 8 corners once, the corners of finer tiles with them. */
 static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
 {
     cx->ntiles = 0;
@@ -119,7 +119,7 @@ static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
         ism_lattice_prefetch(cx, q);
     }
     for (size_t i = 0; i < cx->ntiles; i++)
-        ism_tile_prefetch(cx, &cx->tiles[i], !whole_face(&cx->tiles[i], s));
+        ism_tile_prefetch(cx, &cx->tiles[i], !whole_face(&cx->tiles[i].t, s));
     return true;
 }
 

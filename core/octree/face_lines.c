@@ -1148,16 +1148,16 @@ void ism_lattice_prefetch(ism_cell_ctx *cx, const int32_t ip[3])
     __builtin_prefetch(ism_breaks_slot(cx->breaks, h));
 }
 
-void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *t, bool corners)
+void ism_tile_prefetch(ism_cell_ctx *cx, ism_node_tile *nt, bool corners)
 {
-    ism_quiet_tile key = quiet_key(t);
-    uint64_t hash = tile_hash(&key);
-    __builtin_prefetch(quiet_slot(cx, hash), 0);
-    __builtin_prefetch(memo_slot(cx, hash), 0);
+    nt->key = quiet_key(&nt->t);
+    nt->hash = tile_hash(&nt->key);
+    __builtin_prefetch(quiet_slot(cx, nt->hash), 0);
+    __builtin_prefetch(memo_slot(cx, nt->hash), 0);
     if (!corners)
         return;
     int32_t q[4][3];
-    tile_corners(t, q);
+    tile_corners(&nt->t, q);
     for (int c = 0; c < 4; c++)
         ism_lattice_prefetch(cx, q[c]);
 }
@@ -1350,27 +1350,28 @@ static bool counted_walk(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_ti
     return ok;
 }
 
-bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *t)
+bool ism_tile_lines(ism_cell_ctx *cx, const ism_node_tile *nt)
 {
     cx->zero_tile = false;
-    ism_quiet_tile key = quiet_key(t), unused;
+    const ism_tile *t = &nt->t;
+    const ism_quiet_tile *key = &nt->key;
+    ism_quiet_tile unused;
     if (cx->walk_every_tile)
-        return counted_walk(cx, t, &key, &unused);
-    uint64_t hash = tile_hash(&key);
-    ism_quiet_tile *q = quiet_slot(cx, hash);
-    if (q->where == key.where && q->span == key.span) {
+        return counted_walk(cx, t, key, &unused);
+    ism_quiet_tile *q = quiet_slot(cx, nt->hash);
+    if (q->where == key->where && q->span == key->span) {
         cx->quiet_skips++;
         return true; /* walked before: nothing crosses its boundary */
     }
-    ism_tile_memo *m = memo_slot(cx, hash);
-    if (m->key.where == key.where && m->key.span == key.span) {
+    ism_tile_memo *m = memo_slot(cx, nt->hash);
+    if (m->key.where == key->where && m->key.span == key->span) {
         cx->tile_replays++;
         return replay(cx, m); /* walked before: lines cross it */
     }
     size_t first = cx->lines.n;
-    if (!counted_walk(cx, t, &key, q))
+    if (!counted_walk(cx, t, key, q))
         return false;
     if (!cx->zero_tile && cx->nev > 0)
-        remember(cx, m, &key, first);
+        remember(cx, m, key, first);
     return true;
 }

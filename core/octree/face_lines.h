@@ -14,18 +14,18 @@ bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, in
  * a memo miss probes). Changes nothing. */
 void ism_lattice_prefetch(ism_cell_ctx *cx, const int32_t ip[3]);
 
-/* Asks the memory for what ism_tile_lines will read first about this tile (its quiet-tile
+/* Asks the memory for what ism_tile_lines will read first about tile nt->t (its quiet-tile
  * memo slot, the first cache line of its crossed-tile memo slot, and with `corners` its
  * corners as ism_lattice_prefetch: a caller that asked for them already, as a node's own
  * corners, passes false): the node's tiles are prefetched together, so that these misses
- * overlap. Changes nothing. */
-void ism_tile_prefetch(ism_cell_ctx *cx, const ism_tile *tile, bool corners);
+ * overlap. Sets nt->key and nt->hash, which ism_tile_lines reads; changes nothing else. */
+void ism_tile_prefetch(ism_cell_ctx *cx, ism_node_tile *nt, bool corners);
 
-/* Appends to cx->lines the lines of f = 0 on one tile (a face or part of a face): walked, or
- * copied from the thread's memo of tiles walked in the round (cell_cache.h; unless
- * cx->walk_every_tile). When f vanishes on the whole tile (a plane of the surface
- * lying in the lattice), sets cx->zero_tile, leaves cx->bp holding its boundary and adds no
- * lines. */
-bool ism_tile_lines(ism_cell_ctx *cx, const ism_tile *tile);
+/* Appends to cx->lines the lines of f = 0 on one tile nt->t (a face or part of a face; its
+ * key and hash set by ism_tile_prefetch): walked, or copied from the thread's memo of tiles
+ * walked in the round (cell_cache.h; unless cx->walk_every_tile). When f vanishes on the
+ * whole tile (a plane of the surface lying in the lattice), sets cx->zero_tile, leaves cx->bp
+ * holding its boundary and adds no lines. */
+bool ism_tile_lines(ism_cell_ctx *cx, const ism_node_tile *nt);
 
 #endif
