@@ -14,6 +14,24 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* A point's gradient as ism_normalise3 leaves it, and whether it counts toward a mean unit
+ * gradient (its norm > 0): each polygon's points are normalised once, and every test that
+ * sums unit gradients (reversed, tri_agreement) reads them in its own order. */
+typedef struct unit_g {
+    double u[3];
+    bool ok;
+} unit_g;
+
+/* Polygons of up to this many points keep their unit gradients on the stack; a larger one
+ * (a coarse node's face crossed by finer neighbours' tiles) normalises them as it goes. */
+#define UNIT_STACK 32
+
+static void unit_gradient(const ism_fpoint *p, unit_g *ug)
+{
+    ug->u[0] = p->g[0], ug->u[1] = p->g[1], ug->u[2] = p->g[2];
+    ug->ok = ism_normalise3(ug->u) > 0;
+}
+
 /* Room for n more vertices in o (false when memory runs out). */
 static inline bool out_reserve(ism_cell_out *o, size_t n)
 {
@@ -99,7 +117,7 @@ static double corner_vote(ism_sampler *s, const double node[6], const double c[3
     return isfinite(sum) ? sum : 0;
 }
 
-/* Is the polygon wound against ∇f? Its Newell normal against the mean unit gradient at its
+/* Is the polygon wound against ∇f? (units not NULL: each point's unit gradient left there.) Its Newell normal against the mean unit gradient at its
  * points — unless the points split the vote (some gradients face the normal, others face
  * away: a polygon across a sharp CSG crease, such as the chord of cube-minus-ball's 40°
  * wedge between the ball and a face, two points on the ball and one on the face, whose mean
@@ -113,14 +131,17 @@ static double corner_vote(ism_sampler *s, const double node[6], const double c[3
  * of the gallery, singular ones included, in their own box and moved by 1e-3, 0.37, √2 − 1
  * and 0.6 of a cell, they wind no edge against its neighbour, where the mean alone wound
  * 12 / 14 / 33 of the horn's in the last three. */
-static bool reversed(ism_sampler *s, const double node[6], const ism_fpoint *p, size_t n)
+static bool reversed(ism_sampler *s, const double node[6], const ism_fpoint *p, size_t n,
+                     unit_g *units)
 {
     double nrm[3], g[3] = {0, 0, 0};
     ism_newell(p, n, nrm);
     bool facing = false, away = false;
     for (size_t i = 0; i < n; i++) {
-        double u[3] = {p[i].g[0], p[i].g[1], p[i].g[2]};
-        if (ism_normalise3(u) > 0)
+        unit_g one, *ug = units ? &units[i] : &one;
+        unit_gradient(&p[i], ug);
+        const double *u = ug->u;
+        if (ug->ok)
             for (int k = 0; k < 3; k++)
                 g[k] += u[k];
         double d = ism_dot3(u, nrm);
@@ -187,35 +208,59 @@ static double min_angle_cos(const double *a, const double *b, const double *c)
     return worst; /* cos of the smallest angle: larger is worse */
 }
 
-/* Triangle a, b, c's normal against the mean unit gradient at its corners: > 0 when it keeps
- * the surface's orientation, < 0 when it is turned over, 0 when degenerate. */
-static double tri_agreement(const ism_fpoint *a, const ism_fpoint *b, const ism_fpoint *c)
+/* Triangle a, b, c's normal against the mean unit gradient at its corners (their unit
+ * gradients ua, ub, uc): > 0 when it keeps the surface's orientation, < 0 when it is turned
+ * over, 0 when degenerate. */
+static double tri_agreement_u(const ism_fpoint *a, const ism_fpoint *b, const ism_fpoint *c,
+                              const unit_g *ua, const unit_g *ub, const unit_g *uc)
 {
-    const ism_fpoint *v[3] = {a, b, c};
+    const unit_g *v[3] = {ua, ub, uc};
     double e1[3], e2[3], nrm[3], g[3] = {0, 0, 0};
     for (int k = 0; k < 3; k++) {
         e1[k] = b->p[k] - a->p[k];
         e2[k] = c->p[k] - a->p[k];
     }
     ism_cross3(e1, e2, nrm);
-    for (int j = 0; j < 3; j++) {
-        double u[3] = {v[j]->g[0], v[j]->g[1], v[j]->g[2]};
-        if (ism_normalise3(u) > 0)
+    for (int j = 0; j < 3; j++)
+        if (v[j]->ok)
             for (int k = 0; k < 3; k++)
-                g[k] += u[k];
-    }
+                g[k] += v[j]->u[k];
     return ism_dot3(nrm, g);
+}
+
+/* tri_agreement_u with the corners' unit gradients computed here. */
+static double tri_agreement(const ism_fpoint *a, const ism_fpoint *b, const ism_fpoint *c)
+{
+    unit_g ua, ub, uc;
+    unit_gradient(a, &ua);
+    unit_gradient(b, &ub);
+    unit_gradient(c, &uc);
+    return tri_agreement_u(a, b, c, &ua, &ub, &uc);
+}
+
+/* The unit gradient of q[i] (units[i] when units is not NULL, else computed into *tmp). */
+static const unit_g *unit_of(const ism_fpoint *q, const unit_g *units, size_t i, unit_g *tmp)
+{
+    if (units)
+        return &units[i];
+    unit_gradient(&q[i], tmp);
+    return tmp;
 }
 
 /* Does the fan of q[0..n) (wound to agree with ∇f) around apex — one of its corners or a
  * point off it — hold a turned-over triangle? A fan from a corner of a polygon that is not
  * star-shaped from it (a reflex corner across, as where the polygon runs along a node's
  * face) folds back: the sphere at E = 2e-3, depth 8, box 0.37 cell off the lattice had 4. */
-static bool fan_folds(const ism_fpoint *q, size_t n, const ism_fpoint *apex)
+static bool fan_folds(const ism_fpoint *q, const unit_g *units, size_t n, const ism_fpoint *apex,
+                      const unit_g *uapex)
 {
     for (size_t i = 0; i < n; i++) {
         const ism_fpoint *a = &q[i], *b = &q[(i + 1) % n];
-        if (a != apex && b != apex && tri_agreement(apex, a, b) < 0)
+        if (a == apex || b == apex)
+            continue;
+        unit_g ta, tb;
+        const unit_g *ua = unit_of(q, units, i, &ta), *ub = unit_of(q, units, (i + 1) % n, &tb);
+        if (tri_agreement_u(apex, a, b, uapex, ua, ub) < 0)
             return true;
     }
     return false;
@@ -237,9 +282,9 @@ static bool fan_in_face(const ism_cell_out *out, size_t base, size_t n, const do
 /* The corner whose fan has the largest smallest angle, among the corners whose fan has no
  * turned-over triangle nor one lying in a face of the node (else the fewest such faults:
  * a fold before a face triangle); *in_face: the chosen fan has one of them; *folds: it has
- * a turned-over triangle (fan_folds). */
+ * a turned-over triangle (fan_folds). units: the polygon's unit gradients, or NULL. */
 static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const double node[6],
-                          bool *in_face, bool *folds)
+                          const unit_g *units, bool *in_face, bool *folds)
 {
     const ism_fpoint *q = out->verts + base;
     size_t best = 0;
@@ -258,7 +303,8 @@ static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const 
             worst += 1; /* only when every corner's fan has one */
         if (!(worst < best_cos))
             continue;
-        bool f = fan_folds(q, n, &q[c]);
+        unit_g tc;
+        bool f = fan_folds(q, units, n, &q[c], unit_of(q, units, c, &tc));
         if (f)
             worst += 2; /* only when every corner's fan folds */
         if (worst < best_cos)
@@ -368,10 +414,11 @@ static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double nod
 }
 
 /* The fan from the best corner — or, when that fan folds, the polygon's ears (clip_ears). */
-static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n, const double node[6])
+static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n, const double node[6],
+                                 const unit_g *units)
 {
     bool in_face, folds, emitted;
-    size_t c = best_corner(out, base, n, node, &in_face, &folds);
+    size_t c = best_corner(out, base, n, node, units, &in_face, &folds);
     if (folds) {
         if (!clip_ears(out, base, n, node, &emitted))
             return false;
@@ -410,31 +457,56 @@ static double corner_fan_error(ism_sampler *s, const ism_fpoint *q, size_t n, si
  * E = 7.9e-4 (box ±1.5): 21,224 -> 17,192 triangles, max centroid distance 6.5e-4 -> 6.7e-4;
  * the gyroid ball at 0.0334: 22,612 -> 17,236. */
 static bool corner_fan_within(ism_sampler *s, ism_cell_out *out, size_t base, size_t n,
-                              const double node[6], double max_error, bool *emitted)
+                              const double node[6], double max_error, const unit_g *units,
+                              bool *emitted)
 {
     *emitted = false;
     bool in_face, folds;
-    size_t c = best_corner(out, base, n, node, &in_face, &folds);
+    size_t c = best_corner(out, base, n, node, units, &in_face, &folds);
     if (in_face || corner_fan_error(s, out->verts + base, n, c, max_error) > max_error)
         return true;
     *emitted = true;
     return fan_from_corner(out, base, n, c);
 }
 
+/* fan_folds of the quad q from its corner c. */
+static bool quad_folds(const ism_fpoint *q, const unit_g *units, size_t c)
+{
+    unit_g tc;
+    return fan_folds(q, units, 4, &q[c], unit_of(q, units, c, &tc));
+}
+
 bool ism_loop_reversed(ism_sampler *s, const double node[6], const ism_fpoint *pts, size_t n)
 {
-    return n >= 3 && reversed(s, node, pts, n);
+    return n >= 3 && reversed(s, node, pts, n, NULL);
 }
+
+static bool wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
+                  const double node[6], double max_error, bool flip, const unit_g *pts_units,
+                  ism_cell_out *out);
 
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                           const double node[6], double max_error, ism_cell_out *out)
 {
-    return ism_triangulate_wound(s, pts, n, reach, node, max_error,
-                                 ism_loop_reversed(s, node, pts, n), out);
+    if (n < 3 || n > UNIT_STACK)
+        return ism_triangulate_wound(s, pts, n, reach, node, max_error,
+                                     ism_loop_reversed(s, node, pts, n), out);
+    unit_g units[UNIT_STACK];
+    bool flip = reversed(s, node, pts, n, units);
+    return wound(s, pts, n, reach, node, max_error, flip, units, out);
 }
 
 bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                            const double node[6], double max_error, bool flip, ism_cell_out *out)
+{
+    return wound(s, pts, n, reach, node, max_error, flip, NULL, out);
+}
+
+/* ism_triangulate_wound, with pts' unit gradients in pts_units (pts' order; NULL: each
+ * normalised where it is needed, n ≤ UNIT_STACK when not NULL). */
+static bool wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
+                  const double node[6], double max_error, bool flip, const unit_g *pts_units,
+                  ism_cell_out *out)
 {
     if (n < 3)
         return true;
@@ -444,6 +516,12 @@ bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, doub
     uint32_t b = (uint32_t)base;
     if (n == 3)
         return ism_cell_out_tri(out, b, b + 1, b + 2);
+    unit_g units_in[UNIT_STACK], *units = NULL; /* in the emitted order, as out_polygon's */
+    if (pts_units) {
+        units = units_in;
+        for (size_t i = 0; i < n; i++)
+            units[i] = pts_units[flip ? n - 1 - i : i];
+    }
     if (n == 4) {
         /* along the shorter diagonal, unless that leaves a triangle lying in a face */
         const ism_fpoint *q = out->verts + base;
@@ -454,21 +532,24 @@ bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, doub
         else if (node && (ism_in_one_face(node, q[1].p, q[2].p, q[3].p) ||
                           ism_in_one_face(node, q[1].p, q[3].p, q[0].p)))
             first = true;
-        else if (fan_folds(q, n, &q[first ? 0 : 1]) && !fan_folds(q, n, &q[first ? 1 : 0]))
+        else if (quad_folds(q, units, first ? 0 : 1) && !quad_folds(q, units, first ? 1 : 0))
             first = !first; /* a quad not convex: the other diagonal keeps the orientation */
         if (first)
             return ism_cell_out_tri(out, b, b + 1, b + 2) && ism_cell_out_tri(out, b, b + 2, b + 3);
         return ism_cell_out_tri(out, b + 1, b + 2, b + 3) && ism_cell_out_tri(out, b + 1, b + 3, b);
     }
     bool emitted = false;
-    if (max_error > 0 && !corner_fan_within(s, out, base, n, node, max_error, &emitted))
+    if (max_error > 0 &&
+        !corner_fan_within(s, out, base, n, node, max_error, units, &emitted))
         return false;
     if (emitted)
         return true;
     ism_fpoint c;
+    unit_g uc;
     if (!centre_point(s, out->verts + base, n, reach, node, &c) ||
-        fan_in_face(out, base, n, c.p, node) || fan_folds(out->verts + base, n, &c))
-        return fan_from_best_corner(out, base, n, node);
+        fan_in_face(out, base, n, c.p, node) ||
+        (unit_gradient(&c, &uc), fan_folds(out->verts + base, units, n, &c, &uc)))
+        return fan_from_best_corner(out, base, n, node, units);
     uint32_t ci;
     if (!ism_cell_out_vert(out, &c, &ci))
         return false;
@@ -500,7 +581,7 @@ bool ism_triangulate_fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex
 {
     if (n < 2)
         return true;
-    return fan(pts, n, apex, n >= 3 && reversed(NULL, NULL, pts, n), out);
+    return fan(pts, n, apex, n >= 3 && reversed(NULL, NULL, pts, n, NULL), out);
 }
 
 bool ism_triangulate_tent(const ism_fpoint *pts, size_t n, const ism_fpoint *apex,
