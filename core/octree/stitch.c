@@ -20,8 +20,8 @@
 
 /* A node has a handful of lines (a plain polygon: 3 to 6, 2 ends each; a few more where
  * sheets cross), so its line ends are few. Up to FEW_ENDS ends the graph lives on
- * ism_stitch's stack (no allocation per leaf) and the ends are sorted by insertion, which
- * beats qsort's indirect comparison calls there; more ends are allocated and qsorted. The
+ * ism_stitch's stack (no allocation per leaf) and the ends are grouped by their points
+ * without a sort (grouped_ends); more ends are allocated and qsorted. The
  * Klein bottle at E = 3.27e-3 stitches 39,768 leaves, none with more (callgrind line
  * counts of the allocating branch). */
 #define FEW_ENDS 32
@@ -75,21 +75,22 @@ static double far_agreement(const ism_flines *l, int e1, int e2)
     return fabs(ism_dot3(g1, g2)) / (n1 * n2);
 }
 
-/* Pairs the single-polygon ends meeting at a point without shared lines: each end, in
- * order, with the later unpaired end whose far gradient agrees most. Any number of ends (an
+/* Pairs the single-polygon ends meeting at a point without shared lines (group[0 .. n), in
+ * ascending order): each end, in order, with the later unpaired end whose far gradient
+ * agrees most. Any number of ends (an
  * end is unpaired while its partner is -1, as build_graph set it; it used to stop at 64 ends,
  * which a node never reaches: at most 3 faces x 4 tiles meet at a point, each tile giving it
  * at most 2 lines). An end left without a partner starts an open chain. */
-static void pair_point(graph *g, const end_ref *group, int n)
+static void pair_point(graph *g, const int *group, int n)
 {
     for (int i = 0; i < n; i++) {
-        int ei = group[i].end;
+        int ei = group[i];
         if (g->partner[ei] >= 0)
             continue;
         int best = -1;
         double best_a = -1;
         for (int j = i + 1; j < n; j++) {
-            int ej = group[j].end;
+            int ej = group[j];
             if (g->partner[ej] >= 0)
                 continue;
             double a = far_agreement(g->l, ei, ej);
@@ -103,34 +104,16 @@ static void pair_point(graph *g, const end_ref *group, int n)
     }
 }
 
-/* Sets g->heap and the four arrays first (allocated ones possibly NULL), so free_graph may
- * run whatever this returns. */
-static bool build_graph(graph *g, const ism_flines *l)
+/* The ends sorted by cmp_end (points compared by value, -0 equal to 0, then by end) into
+ * order[0 .. ne): up to FEW_ENDS by insertion on the stack, more by qsort. */
+static bool sorted_ends(const ism_flines *l, size_t ne, int *order)
 {
-    size_t ne = 2 * l->n;
     end_ref refs_in[FEW_ENDS], *refs = refs_in;
-    g->l = l;
-    g->heap = ne > FEW_ENDS;
-    if (g->heap) {
-        refs = malloc(ne * sizeof *refs);
-        g->node = malloc(ne * sizeof *g->node);
-        g->partner = malloc(ne * sizeof *g->partner);
-        g->terminal = calloc(ne, sizeof *g->terminal);
-        g->used = calloc(l->n, sizeof *g->used);
-        if (!refs || !g->node || !g->partner || !g->terminal || !g->used) {
-            free(refs);
-            return false; /* the caller's free_graph frees the others */
-        }
-    } else {
-        g->node = g->node_in;
-        g->partner = g->partner_in;
-        g->terminal = memset(g->terminal_in, 0, ne * sizeof *g->terminal);
-        g->used = memset(g->used_in, 0, l->n * sizeof *g->used);
-    }
+    if (ne > FEW_ENDS && !(refs = malloc(ne * sizeof *refs)))
+        return false;
     for (size_t e = 0; e < ne; e++) {
         memcpy(refs[e].p, end_point(l, (int)e)->p, sizeof refs[e].p);
         refs[e].end = (int)e;
-        g->partner[e] = -1;
     }
     if (ne <= FEW_ENDS) {
         for (size_t i = 1; i < ne; i++)
@@ -142,26 +125,102 @@ static bool build_graph(graph *g, const ism_flines *l)
     } else {
         qsort(refs, ne, sizeof *refs, cmp_end);
     }
+    for (size_t e = 0; e < ne; e++)
+        order[e] = refs[e].end;
+    if (refs != refs_in)
+        free(refs);
+    return true;
+}
+
+static bool has_nan(const double p[3])
+{
+    return p[0] != p[0] || p[1] != p[1] || p[2] != p[2];
+}
+
+/* The few ends (ne ≤ FEW_ENDS) into order[0 .. ne) by their points' values, ends ascending
+ * among equal values: the points in the order each first appears, where cmp_end's sort puts
+ * them in coordinate order. Only where the ends meet is read (build_graph groups the ends of
+ * one point, and what a group does never depends on the others'), and a group's ends keep
+ * cmp_end's order, -0 and 0 interleaved by end as it leaves them. False when a coordinate is
+ * NaN (cmp_end's order is then no order, and what the sort leaves depends on how it sorts):
+ * the caller sorts, as before. */
+static bool grouped_ends(const ism_flines *l, size_t ne, int *order)
+{
+    const double *rep[FEW_ENDS]; /* each distinct value's first point */
+    int cls[FEW_ENDS], count[FEW_ENDS + 1] = {0}, nc = 0;
+    for (size_t e = 0; e < ne; e++) {
+        const double *p = end_point(l, (int)e)->p;
+        if (has_nan(p))
+            return false;
+        int c = 0;
+        while (c < nc && !(rep[c][0] == p[0] && rep[c][1] == p[1] && rep[c][2] == p[2]))
+            c++;
+        if (c == nc)
+            rep[nc++] = p;
+        cls[e] = c;
+        count[c + 1]++;
+    }
+    for (int c = 0; c < nc; c++)
+        count[c + 1] += count[c];
+    for (size_t e = 0; e < ne; e++)
+        order[count[cls[e]]++] = (int)e;
+    return true;
+}
+
+/* Sets g->heap and the four arrays first (allocated ones possibly NULL), so free_graph may
+ * run whatever this returns. */
+static bool build_graph(graph *g, const ism_flines *l)
+{
+    size_t ne = 2 * l->n;
+    int order_in[FEW_ENDS], *order = order_in;
+    g->l = l;
+    g->heap = ne > FEW_ENDS;
+    if (g->heap) {
+        order = malloc(ne * sizeof *order);
+        g->node = malloc(ne * sizeof *g->node);
+        g->partner = malloc(ne * sizeof *g->partner);
+        g->terminal = calloc(ne, sizeof *g->terminal);
+        g->used = calloc(l->n, sizeof *g->used);
+        if (!order || !g->node || !g->partner || !g->terminal || !g->used) {
+            free(order);
+            return false; /* the caller's free_graph frees the others */
+        }
+    } else {
+        g->node = g->node_in;
+        g->partner = g->partner_in;
+        g->terminal = memset(g->terminal_in, 0, ne * sizeof *g->terminal);
+        g->used = memset(g->used_in, 0, l->n * sizeof *g->used);
+    }
+    for (size_t e = 0; e < ne; e++)
+        g->partner[e] = -1;
+    if ((g->heap || !grouped_ends(l, ne, order)) && !sorted_ends(l, ne, order)) {
+        if (order != order_in)
+            free(order);
+        return false;
+    }
+    /* a point: a run of ends whose points are the same bits (cmp_end's order puts -0 and 0
+     * together, which this parts again) */
     g->npoints = 0;
     for (size_t i = 0; i < ne;) {
+        const double *p = end_point(l, order[i])->p;
         size_t j = i + 1;
-        while (j < ne && memcmp(refs[j].p, refs[i].p, sizeof refs[i].p) == 0)
+        while (j < ne && memcmp(end_point(l, order[j])->p, p, 3 * sizeof *p) == 0)
             j++;
         int pt = g->npoints++;
         bool shared = false;
         for (size_t k = i; k < j; k++) {
-            g->node[refs[k].end] = pt;
-            shared |= is_shared(l, refs[k].end);
+            g->node[order[k]] = pt;
+            shared |= is_shared(l, order[k]);
             /* a singular point ends chains too: each sheet's polygon passes it once */
-            shared |= (end_point(l, refs[k].end)->flags & ISM_FP_SINGULAR) != 0;
+            shared |= (end_point(l, order[k])->flags & ISM_FP_SINGULAR) != 0;
         }
         g->terminal[pt] = shared;
         if (!shared)
-            pair_point(g, refs + i, (int)(j - i));
+            pair_point(g, order + i, (int)(j - i));
         i = j;
     }
-    if (refs != refs_in)
-        free(refs);
+    if (order != order_in)
+        free(order);
     return true;
 }
 

@@ -163,3 +163,52 @@ Test(stitch, shared_line_closes_each_sheet)
     for (int n = 4; n <= 12; n++)
         two_sheets(n, true);
 }
+
+/* A square whose corner D = (0, 2, 0.5) is written (-0, 2, 0.5) by its last line: ends
+ * meet only where their points are the same bits (every node computes a shared point bit for
+ * bit the same, stitch.c), so -0 and 0 are two points and the square is one open chain of 5
+ * points (with D written alike: one closed loop of 4). Alone (8 ends, the stack's graph) and
+ * beside a 17-gon elsewhere (42 ends, the heap's): both ways group the ends alike. */
+static void square_with_zero(double dx, bool beside, size_t want_pts, bool want_closed)
+{
+    const double pa[4][3] = { { 0.5, 1, 0.5 }, { 1, 1, 0.5 }, { 1, 2, 0.5 }, { 0, 2, 0.5 } };
+    ism_fpoint q[4];
+    for (int i = 0; i < 4; i++)
+        q[i] = fpoint(pa[i][0], pa[i][1], pa[i][2], NZ);
+    ism_fpoint d2 = fpoint(dx, 2, 0.5, NZ);
+    lineset s = { .n = 0 };
+    add_line(&s, q[0], q[1], ISM_LINE_REGULAR);
+    add_line(&s, q[1], q[2], ISM_LINE_REGULAR);
+    add_line(&s, q[2], q[3], ISM_LINE_REGULAR);
+    add_line(&s, d2, q[0], ISM_LINE_REGULAR);
+    if (beside) {
+        ism_fpoint pts[17];
+        const double centre[3] = { 5, 5, 5 };
+        circle(pts, 17, centre, 0, 1, NY);
+        for (int i = 0; i < 17; i++)
+            add_line(&s, pts[i], pts[(i + 1) % 17], ISM_LINE_REGULAR);
+    }
+    ism_flines l = { s.v, s.n, s.n };
+    ism_loops out = { 0 };
+    cr_assert(ism_stitch(&l, &out));
+    cr_assert_eq(out.nloops, beside ? 2u : 1u);
+    size_t found = 0;
+    for (size_t i = 0; i < out.nloops; i++) {
+        const ism_loop *lp = &out.loops[i];
+        if (out.pts[lp->first].g[2] != 1)
+            continue; /* the 17-gon (normal y) */
+        found++;
+        cr_expect_eq(lp->n, want_pts, "dx %g beside %d: %zu points", dx, beside, lp->n);
+        cr_expect_eq(lp->closed, want_closed, "dx %g beside %d", dx, beside);
+    }
+    cr_expect_eq(found, 1u);
+    ism_loops_free(&out);
+}
+
+Test(stitch, signed_zero_is_another_point)
+{
+    for (int beside = 0; beside < 2; beside++) {
+        square_with_zero(0.0, beside, 4, true);
+        square_with_zero(-0.0, beside, 5, false);
+    }
+}
