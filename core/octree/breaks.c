@@ -153,12 +153,14 @@ static void gather_corners(void *ctx, size_t blk, int thread)
         const ism_node *nd = &nodes[i];
         if (!taken(w, i))
             continue;
-        int32_t s = ism_grid_cell_steps(g, nd->level);
+        /* corner c's key is the origin's plus the leaf's size in each field c moves along:
+         * the origin and the size are multiples of 1 << pk.shift (the finest leaf's size),
+         * and a field's sum stays within its cb bits (coordinates 0 .. 2^finest), so the
+         * sum is pack() of the corner */
+        uint64_t ds = (uint64_t)(ism_grid_cell_steps(g, nd->level) >> pk.shift);
+        uint64_t k0 = pack(&pk, 2, nd->org), dx = ds << 2 * pk.cb, dy = ds << pk.cb;
         for (int c = 0; c < 8; c++) {
-            int32_t p[3];
-            for (int a = 0; a < 3; a++)
-                p[a] = nd->org[a] + ((c >> a) & 1) * s;
-            uint64_t key = pack(&pk, 2, p);
+            uint64_t key = k0 + (c & 1 ? dx : 0) + (c & 2 ? dy : 0) + (c & 4 ? ds : 0);
             uint64_t *slot = &seen[ism_cache_mix(key) & ((1u << CORNER_FILTER_BITS) - 1)];
             if (*slot == key + 1)
                 continue;
