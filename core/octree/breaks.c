@@ -297,10 +297,13 @@ static void rekey(void *ctx, size_t blk, int thread)
     uint32_t *idx = w->idx;
     int axis = w->axis;
     range r = block(w, blk);
+    /* pack(axis) of a point is its pack(2) with the three cb-bit fields rotated left by
+     * (axis + 1) fields: (x, y, z) -> (y, z, x) along x, (z, x, y) along y (3 cb ≤ 60 bits:
+     * cb = finest + 1 ≤ ISM_GRID_MAX_DEPTH + 1) */
+    int rot = (axis + 1) * pk.cb, width = 3 * pk.cb;
+    uint64_t mask = ((uint64_t)1 << width) - 1;
     for (size_t i = r.lo; i < r.hi; i++) {
-        int32_t p[3];
-        unpack(&pk, 2, k[i], p);
-        ak[i] = pack(&pk, axis, p);
+        ak[i] = ((k[i] << rot) & mask) | k[i] >> (width - rot);
         idx[i] = (uint32_t)i;
     }
 }
