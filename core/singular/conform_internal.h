@@ -149,6 +149,9 @@ typedef struct cf_polyline {
                                cell (grown by the rounding slack): lo xyz, hi xyz */
     double (*ball)[4];      /* per segment: its midpoint and half its length (grown by
                                its rounding) */
+    double (*line)[8];      /* per segment: its midpoint, half its length, unit direction
+                               and its largest coordinate's magnitude (conform_curve.c's
+                               estimates: no rounding grown into them) */
     bool pinch[2];          /* its first / last point is a pinch point (set by the caller
                                after cf_polyline_init; open curves only) */
 } cf_polyline;
