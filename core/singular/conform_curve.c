@@ -243,60 +243,16 @@ static inline __attribute__((always_inline)) bool cell_may_hold(const cf_polylin
     return ism_sqdist_box3(q, b, b + 3) <= *r * *r;
 }
 
-/* Whether segment sg lies farther than r from q: its ball (midpoint, half its length, grown
- * by its rounding) does. With r a near_bound of the nearest so far, its distance exceeds that
- * nearest's, so it could replace it neither as nearer nor as an equal: not read (Klein bottle
- * at E 0.00327: ~40 segments a query, most of them along the curve well beyond the nearest). */
+/* Whether segment sg lies farther than r from q (d2: the squared distance from q to its
+ * midpoint): its ball (midpoint, half its length, grown by its rounding) does. With r a
+ * near_bound of the nearest so far, its distance exceeds that nearest's, so it could replace
+ * it neither as nearer nor as an equal: not read (Klein bottle at E 0.00327: ~40 segments a
+ * query, most of them along the curve well beyond the nearest). */
 static inline __attribute__((always_inline)) bool seg_beyond(const cf_polyline *pl, size_t sg,
-                                                           const double q[3], double r)
+                                                           double d2, double r)
 {
-    const double *b = pl->ball[sg];
-    double d[3] = {q[0] - b[0], q[1] - b[1], q[2] - b[2]}, rr = r + b[3];
-    return d[0] * d[0] + d[1] * d[1] + d[2] * d[2] > rr * rr;
-}
-
-/* The nearest point of the segments filed in the cells within `within` of q (INFINITY when
- * none lies that close). A cell whose box is farther than the nearest so far is skipped:
- * none of its segments would have replaced it (the first of equals is kept), so the answer
- * is the one of reading them all. */
-static double nearest_within(const cf_polyline *pl, const double q[3], double within, double *s,
-                             double foot[3])
-{
-    double lo[3], hi[3];
-    for (int k = 0; k < 3; k++) {
-        lo[k] = q[k] - within;
-        hi[k] = q[k] + within;
-        if (hi[k] < pl->lo[k] || lo[k] > pl->lo[k] + pl->dim[k] * pl->step)
-            return INFINITY;
-    }
-    int a[3], b[3];
-    cell_range(pl, lo, hi, a, b);
-    double best = INFINITY, mag = cf_max2(fabs(q[0]), cf_max2(fabs(q[1]), fabs(q[2])));
-    for (int k = a[2]; k <= b[2]; k++)
-        for (int j = a[1]; j <= b[1]; j++)
-            for (int i = a[0]; i <= b[0]; i++) {
-                size_t c = cell_index(pl, i, j, k);
-                double r;
-                if (!cell_may_hold(pl, c, q, best, mag, &r))
-                    continue;
-                for (uint32_t x = pl->g_start[c]; x < pl->g_start[c + 1]; x++) {
-                    size_t sg = pl->g_seg[x];
-                    if (seg_beyond(pl, sg, q, r))
-                        continue;
-                    double t, f[3], e = seg_dist2(pl, sg, q, &t, f);
-                    if (e < best) {
-                        best = e;
-                        r = near_bound(best, mag);
-                        if (s)
-                            *s = pl->s[sg] + t * (pl->s[sg + 1] - pl->s[sg]);
-                        if (foot)
-                            for (int m = 0; m < 3; m++)
-                                foot[m] = f[m];
-                    }
-                }
-            }
-    best = sqrt(best);
-    return best <= within ? best : INFINITY;
+    double rr = r + pl->ball[sg][3];
+    return d2 > rr * rr;
 }
 
 /* Segments of a cell read together (cell_min2's buffer; a cell holding more is read in runs
@@ -320,6 +276,98 @@ static inline __attribute__((always_inline)) double seg_low2(const cf_polyline *
     return d2 - 2 * s * a + s * s - CF_QUERY_SLACK * dh * (dh + mag + ln[7]);
 }
 
+/* The squared distances from q to the midpoints of the n segments sg[0..n) into d2; returns
+ * the position of the nearest (0 when none is finite). */
+static inline __attribute__((always_inline)) uint32_t mid_nearest(const cf_polyline *pl,
+                                                                const uint32_t *sg, uint32_t n,
+                                                                const double q[3], double *d2)
+{
+    double dmin = INFINITY;
+    uint32_t arg = 0;
+    for (uint32_t m = 0; m < n; m++) {
+        const double *b = pl->ball[sg[m]];
+        double w[3] = {q[0] - b[0], q[1] - b[1], q[2] - b[2]};
+        d2[m] = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
+        if (d2[m] < dmin) {
+            dmin = d2[m];
+            arg = m;
+        }
+    }
+    return arg;
+}
+
+/* The order a run of segments is measured in: the one whose midpoint is nearest q (arg)
+ * first, then the others (the first in arg's place). */
+static inline uint32_t arg_first(uint32_t o, uint32_t arg)
+{
+    return o == 0 ? arg : o == arg ? 0 : o;
+}
+
+/* The nearest point of the segments filed in the cells within `within` of q (INFINITY when
+ * none lies that close). A cell whose box is farther than the nearest so far is skipped:
+ * none of its segments would have replaced it (the first of equals is kept), so the answer
+ * is the one of reading them all. Each run of a cell's segments is measured as cell_min2's
+ * (the nearest midpoint first, then those the ball test and the bound leave); an equal one
+ * earlier in the run than the one held replaces it, so the answer is still the first of
+ * equals in the cells' and runs' order (Klein bottle at E 0.00327: the zip's 2,168 queries
+ * 15.4M before). */
+static double nearest_within(const cf_polyline *pl, const double q[3], double within, double *s,
+                             double foot[3])
+{
+    double lo[3], hi[3];
+    for (int k = 0; k < 3; k++) {
+        lo[k] = q[k] - within;
+        hi[k] = q[k] + within;
+        if (hi[k] < pl->lo[k] || lo[k] > pl->lo[k] + pl->dim[k] * pl->step)
+            return INFINITY;
+    }
+    int a[3], b[3];
+    cell_range(pl, lo, hi, a, b);
+    double best = INFINITY, mag = cf_max2(fabs(q[0]), cf_max2(fabs(q[1]), fabs(q[2])));
+    double best_t = 0, best_f[3] = {0, 0, 0};
+    size_t best_sg = 0;
+    for (int k = a[2]; k <= b[2]; k++)
+        for (int j = a[1]; j <= b[1]; j++)
+            for (int i = a[0]; i <= b[0]; i++) {
+                size_t c = cell_index(pl, i, j, k);
+                double r;
+                if (!cell_may_hold(pl, c, q, best, mag, &r))
+                    continue;
+                for (uint32_t x0 = pl->g_start[c]; x0 < pl->g_start[c + 1]; x0 += EST_RUN) {
+                    uint32_t n = pl->g_start[c + 1] - x0 < EST_RUN ? pl->g_start[c + 1] - x0
+                                                                   : EST_RUN;
+                    const uint32_t *sg = pl->g_seg + x0;
+                    double d2[EST_RUN];
+                    uint32_t arg = mid_nearest(pl, sg, n, q, d2), held = EST_RUN;
+                    for (uint32_t o = 0; o < n; o++) {
+                        uint32_t m = arg_first(o, arg);
+                        if (seg_beyond(pl, sg[m], d2[m], r) ||
+                            !(seg_low2(pl, sg[m], q, mag) <= best))
+                            continue; /* farther than best */
+                        double t, f[3], e = seg_dist2(pl, sg[m], q, &t, f);
+                        if (e < best || (e == best && m < held && held < EST_RUN)) {
+                            best = e;
+                            r = near_bound(best, mag);
+                            held = m;
+                            best_sg = sg[m];
+                            best_t = t;
+                            for (int u = 0; u < 3; u++)
+                                best_f[u] = f[u];
+                        }
+                    }
+                }
+            }
+    if (best < INFINITY) {
+        if (s)
+            *s = pl->s[best_sg] + best_t * (pl->s[best_sg + 1] - pl->s[best_sg]);
+        if (foot)
+            for (int u = 0; u < 3; u++)
+                foot[u] = best_f[u];
+    }
+    best = sqrt(best);
+    return best <= within ? best : INFINITY;
+}
+
 /* The smallest squared distance to the segments filed in cell (i, j, k), below best.
  * Inlined with cell_may_hold and the distance: the ring search reads a dozen cells per
  * query, most of them empty (crossing-spheres' tube: 178k calls, callgrind). The ring
@@ -340,22 +388,12 @@ static inline __attribute__((always_inline)) double cell_min2(const cf_polyline 
     for (uint32_t x0 = pl->g_start[c]; x0 < pl->g_start[c + 1]; x0 += EST_RUN) {
         uint32_t n = pl->g_start[c + 1] - x0 < EST_RUN ? pl->g_start[c + 1] - x0 : EST_RUN;
         const uint32_t *sg = pl->g_seg + x0;
-        double d2[EST_RUN], dmin = INFINITY;
-        uint32_t arg = 0;
-        for (uint32_t m = 0; m < n; m++) { /* the squared distances to the midpoints */
-            const double *b = pl->ball[sg[m]];
-            double w[3] = {q[0] - b[0], q[1] - b[1], q[2] - b[2]};
-            d2[m] = w[0] * w[0] + w[1] * w[1] + w[2] * w[2];
-            if (d2[m] < dmin) {
-                dmin = d2[m];
-                arg = m;
-            }
-        }
+        double d2[EST_RUN];
+        uint32_t arg = mid_nearest(pl, sg, n, q, d2);
         for (uint32_t o = 0; o < n; o++) {
-            uint32_t m = o == 0 ? arg : o == arg ? 0 : o; /* arg first */
-            double rr = r + pl->ball[sg[m]][3];
-            if (d2[m] > rr * rr || !(seg_low2(pl, sg[m], q, mag) < best))
-                continue; /* seg_beyond, or no nearer than best */
+            uint32_t m = arg_first(o, arg);
+            if (seg_beyond(pl, sg[m], d2[m], r) || !(seg_low2(pl, sg[m], q, mag) < best))
+                continue; /* no nearer than best */
             double e = seg_dist2(pl, sg[m], q, NULL, NULL);
             if (e < best) {
                 best = e;
