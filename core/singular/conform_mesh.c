@@ -16,10 +16,16 @@ bool cf_grow_room(void **v, size_t *cap, size_t need, size_t sz)
     size_t c = *cap ? *cap : 64;
     while (c < need)
         c *= 2;
-    void *p = realloc(*v, c * sz);
+    /* fresh: calloc's pages come zeroed from the system for large sizes, where the memset
+     * wrote every byte (callgrind counts a byte an instruction: 12 MB of new room on the
+     * Klein bottle at E 0.00327, 13.8M of its conformance's 400M) */
+    void *p = *cap ? realloc(*v, c * sz) : calloc(c, sz);
     if (!p)
         return false;
-    memset((char *)p + *cap * sz, 0, (c - *cap) * sz);
+    if (*cap)
+        memset((char *)p + *cap * sz, 0, (c - *cap) * sz);
+    else
+        free(*v);
     *v = p;
     *cap = c;
     return true;

@@ -45,7 +45,7 @@ static double vertex_distance(const cf_ctx *c, const tube *tb, uint32_t v, uint3
     for (int k = 0; k < 3; k++)
         in = in && p[k] >= tb->lo[k] - tb->r - tb->reach && p[k] <= tb->hi[k] + tb->r + tb->reach;
     *curve = 0;
-    double mag = fmax(fabs(p[0]), fmax(fabs(p[1]), fabs(p[2])));
+    double mag = cf_max2(fabs(p[0]), cf_max2(fabs(p[1]), fabs(p[2])));
     for (size_t i = 0; in && i < tb->n; i++) {
         /* a curve whose box is farther than the nearest so far can be neither nearer nor
          * as near (the first of equals is kept) */
@@ -85,8 +85,8 @@ static bool tri_in_tube(const cf_ctx *c, uint32_t t, void *arg)
     for (int k = 0; k < 3; k++)
         vd[k] = vertex_distance(c, tb, v[k], &vc[k]);
     /* a corner within r, or every corner farther than r + the longest edge: decided */
-    double dmin = fmin(vd[0], fmin(vd[1], vd[2]));
-    double edge = sqrt(fmax(ism_sqdist3(a, b), fmax(ism_sqdist3(b, d), ism_sqdist3(d, a))));
+    double dmin = cf_min2(vd[0], cf_min2(vd[1], vd[2]));
+    double edge = sqrt(cf_max2(ism_sqdist3(a, b), cf_max2(ism_sqdist3(b, d), ism_sqdist3(d, a))));
     if (dmin <= tb->r)
         return true;
     if (edge <= tb->reach && !(dmin <= tb->r + edge))
@@ -138,12 +138,12 @@ static bool gather_runs(cf_ctx *c, const cf_polyline *pl, size_t n, double r, cf
                 const double *b = pl[k].p + 3 * ((i + 1) % pl[k].n);
                 double ext = 0;
                 for (int j = 0; j < 3; j++)
-                    ext = fmax(ext, fmax(hi[j], b[j]) - fmin(lo[j], b[j]));
+                    ext = cf_max2(ext, cf_max2(hi[j], b[j]) - cf_min2(lo[j], b[j]));
                 if (ext > CHUNK_RHO * r && (hi[0] > lo[0] || hi[1] > lo[1] || hi[2] > lo[2]))
                     break;
                 for (int j = 0; j < 3; j++) {
-                    lo[j] = fmin(lo[j], b[j]);
-                    hi[j] = fmax(hi[j], b[j]);
+                    lo[j] = cf_min2(lo[j], b[j]);
+                    hi[j] = cf_max2(hi[j], b[j]);
                 }
             }
             double qlo[3], qhi[3];
@@ -214,7 +214,7 @@ static bool longest_edge_near_curves(cf_ctx *c, tube *tb, double *out)
             near = vertex_distance(c, tb, v[k], &curve) <= tb->r;
         }
         if (near)
-            best = fmax(best, cf_triangle_longest_edge2(c->m, cand.t[i]));
+            best = cf_max2(best, cf_triangle_longest_edge2(c->m, cand.t[i]));
     }
     free(cand.t);
     *out = sqrt(best);
