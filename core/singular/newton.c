@@ -4,6 +4,7 @@
 #include "core/util/vec3.h"
 
 #include <math.h>
+#include <string.h>
 
 static bool inside(const double p[3], const double lo[3], const double hi[3])
 {
@@ -13,12 +14,9 @@ static bool inside(const double p[3], const double lo[3], const double hi[3])
     return true;
 }
 
-static double jet_at(const ism_tape *t, ism_eval_ws *ws, const double p[3], double g[3],
-                     double h[6], uint64_t *evals)
+/* The Frobenius norm of a Hessian (xx, xy, xz, yy, yz, zz). */
+static double frobenius(const double h[6])
 {
-    ism_eval_hessian(t, ws, p[0], p[1], p[2], g, h);
-    if (evals)
-        ++*evals;
     return sqrt(h[0] * h[0] + h[3] * h[3] + h[5] * h[5]
                 + 2.0 * (h[1] * h[1] + h[2] * h[2] + h[4] * h[4]));
 }
@@ -66,39 +64,114 @@ static void extrapolate(steps *h, double step[3], const double p[3], const ism_n
     h->ratio = 0.0; /* two fresh ratios before the next jump */
 }
 
+/* One run between two jets: the scalar loop (ism_sing_newton) and the lanes
+ * (ism_sing_newton_lanes) drive the same two steps, so each lane takes the scalar run's
+ * operations in its order. */
+typedef struct run {
+    double *p;
+    const ism_newton_opts *o;
+    ism_newton_result r; /* r.grad, r.hess: the jet at p, written by the caller's evaluator */
+    steps hist;
+    double step[3];      /* the step that led to p */
+    bool done;           /* ended by the jet at p (not finite, or the step was short) */
+} run;
+
+static void run_begin(run *u, double p[3], const ism_newton_opts *o)
+{
+    *u = (run){ .p = p, .o = o, .r = { false, 0, INFINITY, { 0 }, { 0 } } };
+}
+
+/* The next iterate into u->p: true when it moved there and wants its jet; false when the
+ * run is over (converged at a zero gradient, out of steps, no step, or the step leaves
+ * [lo, hi]: p is then the last point inside). */
+static bool run_step(run *u)
+{
+    const ism_newton_opts *o = u->o;
+    if (u->done || u->r.iterations >= o->max_iter)
+        return false;
+    if (u->r.grad_norm == 0.0) {
+        u->r.converged = true;
+        return false;
+    }
+    if (!ism_sym3_pinv_step(u->r.grad, u->r.hess, o->rel, o->trust, u->step))
+        return false;
+    if (o->extrapolate)
+        extrapolate(&u->hist, u->step, u->p, o);
+    double q[3] = { u->p[0] + u->step[0], u->p[1] + u->step[1], u->p[2] + u->step[2] };
+    if (!inside(q, o->lo, o->hi))
+        return false;
+    for (int k = 0; k < 3; k++)
+        u->p[k] = q[k];
+    u->r.iterations++;
+    return true;
+}
+
+/* After the jet at p (u->r.grad, u->r.hess): the gradient's norm, and after a step the end
+ * of the run when it is not finite or the step was short. */
+static void run_took_jet(run *u)
+{
+    u->r.grad_norm = ism_norm3(u->r.grad);
+    if (u->r.iterations == 0)
+        return;
+    if (!(u->r.grad_norm < INFINITY)) {
+        u->done = true;
+        return;
+    }
+    if (ism_norm3(u->step) < u->o->tol) {
+        /* a short step is convergence only with a small gradient: a step truncated to
+           directions the gradient does not point along is also short */
+        u->r.converged =
+            u->r.grad_norm <= ISM_SING_NEWTON_RESID * u->o->tol * frobenius(u->r.hess);
+        u->done = true;
+    }
+}
+
 ism_newton_result ism_sing_newton(const ism_tape *t, ism_eval_ws *ws, double p[3],
                                   const ism_newton_opts *o, uint64_t *evals)
 {
-    ism_newton_result r = { false, 0, INFINITY, { 0 }, { 0 } };
-    double *g = r.grad, *h = r.hess, step[3]; /* every exit leaves the jet of the final p */
-    jet_at(t, ws, p, g, h, evals);
-    r.grad_norm = ism_norm3(g);
-    steps hist = { { 0 }, 0.0, 0.0 };
-    while (r.iterations < o->max_iter) {
-        if (r.grad_norm == 0.0) {
-            r.converged = true;
-            return r;
+    run u;
+    run_begin(&u, p, o);
+    do {
+        ism_eval_hessian(t, ws, p[0], p[1], p[2], u.r.grad, u.r.hess);
+        if (evals)
+            ++*evals;
+        run_took_jet(&u);
+    } while (run_step(&u));
+    return u.r;
+}
+
+void ism_sing_newton_lanes(const ism_tape *t, ism_eval_ws *ws, double (*p)[3],
+                           const ism_newton_opts *o, ism_newton_result *r, size_t n,
+                           uint64_t *evals)
+{
+    for (size_t a = 0; a < n; a += ISM_SING_NEWTON_LANES) {
+        size_t m = n - a < ISM_SING_NEWTON_LANES ? n - a : ISM_SING_NEWTON_LANES;
+        run u[ISM_SING_NEWTON_LANES];
+        size_t live[ISM_SING_NEWTON_LANES], nl = m;
+        double at[ISM_SING_NEWTON_LANES][3], f[ISM_SING_NEWTON_LANES];
+        double g[ISM_SING_NEWTON_LANES][3], h[ISM_SING_NEWTON_LANES][6];
+        for (size_t i = 0; i < m; i++) {
+            run_begin(&u[i], p[a + i], &o[a + i]);
+            live[i] = i;
         }
-        if (!ism_sym3_pinv_step(g, h, o->rel, o->trust, step))
-            return r;
-        if (o->extrapolate)
-            extrapolate(&hist, step, p, o);
-        double q[3] = { p[0] + step[0], p[1] + step[1], p[2] + step[2] };
-        if (!inside(q, o->lo, o->hi))
-            return r;
-        for (int k = 0; k < 3; k++)
-            p[k] = q[k];
-        r.iterations++;
-        double hnorm = jet_at(t, ws, p, g, h, evals);
-        r.grad_norm = ism_norm3(g);
-        if (!(r.grad_norm < INFINITY))
-            return r;
-        if (ism_norm3(step) < o->tol) {
-            /* a short step is convergence only with a small gradient: a step truncated to
-               directions the gradient does not point along is also short */
-            r.converged = r.grad_norm <= ISM_SING_NEWTON_RESID * o->tol * hnorm;
-            return r;
+        while (nl) {
+            for (size_t j = 0; j < nl; j++)
+                memcpy(at[j], u[live[j]].p, sizeof at[j]);
+            ism_eval_hessian_batch(t, ws, (const double (*)[3])at, f, g, h, nl);
+            if (evals)
+                *evals += nl;
+            size_t keep = 0;
+            for (size_t j = 0; j < nl; j++) {
+                run *v = &u[live[j]];
+                memcpy(v->r.grad, g[j], sizeof g[j]);
+                memcpy(v->r.hess, h[j], sizeof h[j]);
+                run_took_jet(v);
+                if (run_step(v))
+                    live[keep++] = live[j];
+            }
+            nl = keep;
         }
+        for (size_t i = 0; i < m; i++)
+            r[a + i] = u[i].r;
     }
-    return r;
 }

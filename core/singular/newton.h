@@ -51,4 +51,16 @@ typedef struct ism_newton_opts {
 ism_newton_result ism_sing_newton(const ism_tape *t, ism_eval_ws *ws, double p[3],
                                   const ism_newton_opts *o, uint64_t *evals);
 
+/* Runs per pass of ism_sing_newton_lanes: the singular search's projection runs
+ * (SEARCH_PROJECT_RUN) at once. */
+#define ISM_SING_NEWTON_LANES 64
+
+/* ism_sing_newton from each of p[0..n) with o[i], r[i] its result, run side by side: each
+ * pass takes the jets of all unfinished runs in one ism_eval_hessian_batch (bit for bit the
+ * scalar jets), so each p[i] and r[i] are exactly what ism_sing_newton(t, ws, p[i], &o[i])
+ * gives. *evals (may be NULL) counts the Hessians, as there. */
+void ism_sing_newton_lanes(const ism_tape *t, ism_eval_ws *ws, double (*p)[3],
+                           const ism_newton_opts *o, ism_newton_result *r, size_t n,
+                           uint64_t *evals);
+
 #endif

@@ -1,0 +1,118 @@
+/* test_newton_lanes.c — ism_sing_newton_lanes (runs side by side, their Hessians in one
+ * batch a pass) against ism_sing_newton run by run: the same final point, convergence,
+ * iteration count, gradient norm, gradient and Hessian, bit for bit, and the same number of
+ * Hessians. The starts are spread over the box (a deterministic stream), half of them held to
+ * a small cell grown by half its width as the singular search's candidates are, half to the
+ * whole box, so the runs end at different passes (some converge onto critical points of f,
+ * some leave their bounds, some run out of steps); more runs than one pass takes
+ * (ISM_SING_NEWTON_LANES), so a second pass of lanes runs too. A jet given to the wrong lane,
+ * or a lane dropped or kept a pass too long, moves a point or a count here. The Klein bottle
+ * (its double curve), Steiner's Roman surface (three double lines through a triple point),
+ * Kummer's 16 nodes and the cross-cap, in the three placements (pf_sweep_box). */
+#include <criterion/criterion.h>
+#include <math.h>
+#include <string.h>
+#include "poly_fixture.h"
+#include "test_eval_surfaces.h"
+#include "core/singular/newton.h"
+
+/* Starts per surface and placement: over two passes of lanes. */
+#define LANES_RUNS (2 * ISM_SING_NEWTON_LANES + 22)
+
+typedef struct starts {
+    double p[LANES_RUNS][3], lo[LANES_RUNS][3], hi[LANES_RUNS][3];
+    ism_newton_opts o[LANES_RUNS];
+} starts;
+
+/* Start i in box b: odd ones held to a cell of 1/64 of the box grown by half its width (the
+ * search's candidates at depth 6), even ones to the box, with the search's options. */
+static void make_starts(const double b[6], test_rng *rng, starts *s)
+{
+    double width = 0.0;
+    for (int k = 0; k < 3; k++)
+        width = fmax(width, (b[k + 3] - b[k]) / 64.0);
+    for (int i = 0; i < LANES_RUNS; i++) {
+        for (int k = 0; k < 3; k++) {
+            double e = (b[k + 3] - b[k]) / 64.0;
+            s->p[i][k] = test_uniform(rng, b[k] + e, b[k + 3] - e);
+            s->lo[i][k] = i % 2 ? s->p[i][k] - e : b[k];
+            s->hi[i][k] = i % 2 ? s->p[i][k] + e : b[k + 3];
+        }
+        s->o[i] = (ism_newton_opts){ ISM_SING_PINV_REL, i % 2 ? width : 8.0 * width,
+                                     1e-10 * width, 64, s->lo[i], s->hi[i], true };
+    }
+}
+
+static void expect_lanes_as_runs(const ism_tape *t, const char *name, const double base[6])
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert_not_null(ws);
+    for (int w = pf_first_box() - 1; w < 2; w++) {
+        double box[6];
+        pf_sweep_box(base, 6, w, box);
+        test_rng rng = { 29u + (uint64_t)(w + 1) };
+        static starts s;
+        make_starts(box, &rng, &s);
+        double lanes[LANES_RUNS][3];
+        memcpy(lanes, s.p, sizeof lanes);
+        ism_newton_result lr[LANES_RUNS];
+        uint64_t lane_evals = 0, run_evals = 0;
+        ism_sing_newton_lanes(t, ws, lanes, s.o, lr, LANES_RUNS, &lane_evals);
+        int converged = 0, left = 0, most = 0, fewest = 1 << 30;
+        for (int i = 0; i < LANES_RUNS; i++) {
+            double p[3] = { s.p[i][0], s.p[i][1], s.p[i][2] };
+            ism_newton_result r = ism_sing_newton(t, ws, p, &s.o[i], &run_evals);
+            cr_expect(!memcmp(p, lanes[i], sizeof p), "%s box %d run %d: end point", name, w, i);
+            cr_expect(r.converged == lr[i].converged && r.iterations == lr[i].iterations
+                          && !memcmp(&r.grad_norm, &lr[i].grad_norm, sizeof r.grad_norm)
+                          && !memcmp(r.grad, lr[i].grad, sizeof r.grad)
+                          && !memcmp(r.hess, lr[i].hess, sizeof r.hess),
+                      "%s box %d run %d: %d/%d iterations, converged %d/%d", name, w, i,
+                      r.iterations, lr[i].iterations, r.converged, lr[i].converged);
+            converged += r.converged;
+            left += !r.converged;
+            most = r.iterations > most ? r.iterations : most;
+            fewest = r.iterations < fewest ? r.iterations : fewest;
+        }
+        cr_expect_eq(lane_evals, run_evals, "%s box %d: %llu Hessians in lanes, %llu one by one",
+                     name, w, (unsigned long long)lane_evals, (unsigned long long)run_evals);
+        /* the runs end at different passes: some converge, some do not, counts differ */
+        cr_expect_gt(converged, 5, "%s box %d: %d runs converged", name, w, converged);
+        cr_expect_gt(left, 5, "%s box %d: %d runs did not converge", name, w, left);
+        cr_expect_gt(most, fewest + 3, "%s box %d: iterations %d..%d", name, w, fewest, most);
+    }
+    ism_eval_ws_free(ws);
+}
+
+Test(newton_lanes, klein_bottle)
+{
+    const test_surface *s = test_surface_named("klein-bottle");
+    ism_tape *t = test_surface_compile(s);
+    expect_lanes_as_runs(t, s->name, s->box);
+    ism_tape_free(t);
+}
+
+Test(newton_lanes, steiner_roman)
+{
+    const test_surface *s = test_surface_named("steiner-roman");
+    ism_tape *t = test_surface_compile(s);
+    expect_lanes_as_runs(t, s->name, s->box);
+    ism_tape_free(t);
+}
+
+Test(newton_lanes, kummer_16_nodes)
+{
+    const test_surface *s = test_surface_named("kummer-16-nodes");
+    ism_tape *t = test_surface_compile(s);
+    expect_lanes_as_runs(t, s->name, s->box);
+    ism_tape_free(t);
+}
+
+Test(newton_lanes, cross_cap)
+{
+    pf_surface s = { "4*x^2*(x^2 + y^2 + z^2 + z) + y^2*(y^2 + z^2 - 1)", NULL, 0, NULL, 0 };
+    ism_tape *t = pf_compile(&s);
+    const double box[6] = { -1.3, -1.3, -1.6, 1.3, 1.3, 1.4 };
+    expect_lanes_as_runs(t, "cross-cap", box);
+    ism_tape_free(t);
+}
