@@ -1,5 +1,6 @@
 /* newton.c — pseudo-inverse Newton on ∇f = 0 (newton.h). */
 #include "core/singular/newton.h"
+#include "core/singular/sym3_lanes.h"
 #include "core/util/sym3.h"
 #include "core/util/vec3.h"
 
@@ -81,19 +82,27 @@ static void run_begin(run *u, double p[3], const ism_newton_opts *o)
     *u = (run){ .p = p, .o = o, .r = { false, 0, INFINITY, { 0 }, { 0 } } };
 }
 
-/* The next iterate into u->p: true when it moved there and wants its jet; false when the
- * run is over (converged at a zero gradient, out of steps, no step, or the step leaves
- * [lo, hi]: p is then the last point inside). */
-static bool run_step(run *u)
+/* The next iterate into u->p (run_step: run_wants_step, the pseudo-inverse step, run_move):
+ * true when it moved there and wants its jet; false when the run is over (converged at a
+ * zero gradient, out of steps, no step, or the step leaves [lo, hi]: p is then the last
+ * point inside). */
+static bool run_wants_step(run *u)
 {
-    const ism_newton_opts *o = u->o;
-    if (u->done || u->r.iterations >= o->max_iter)
+    if (u->done || u->r.iterations >= u->o->max_iter)
         return false;
     if (u->r.grad_norm == 0.0) {
         u->r.converged = true;
         return false;
     }
-    if (!ism_sym3_pinv_step(u->r.grad, u->r.hess, o->rel, o->trust, u->step))
+    return true;
+}
+
+/* Moves to the next iterate by u->step (ok: the pseudo-inverse gave one), stretched when the
+ * steps shrink steadily: true when it moved and wants its jet. */
+static bool run_move(run *u, bool ok)
+{
+    const ism_newton_opts *o = u->o;
+    if (!ok)
         return false;
     if (o->extrapolate)
         extrapolate(&u->hist, u->step, u->p, o);
@@ -104,6 +113,13 @@ static bool run_step(run *u)
         u->p[k] = q[k];
     u->r.iterations++;
     return true;
+}
+
+static bool run_step(run *u)
+{
+    return run_wants_step(u)
+           && run_move(u, ism_sym3_pinv_step(u->r.grad, u->r.hess, u->o->rel, u->o->trust,
+                                              u->step));
 }
 
 /* After the jet at p (u->r.grad, u->r.hess): the gradient's norm, and after a step the end
@@ -150,6 +166,9 @@ void ism_sing_newton_lanes(const ism_tape *t, ism_eval_ws *ws, double (*p)[3],
         size_t live[ISM_SING_NEWTON_LANES], nl = m;
         double at[ISM_SING_NEWTON_LANES][3], f[ISM_SING_NEWTON_LANES];
         double g[ISM_SING_NEWTON_LANES][3], h[ISM_SING_NEWTON_LANES][6];
+        double rel[ISM_SING_NEWTON_LANES], trust[ISM_SING_NEWTON_LANES];
+        double step[ISM_SING_NEWTON_LANES][3];
+        bool ok[ISM_SING_NEWTON_LANES];
         for (size_t i = 0; i < m; i++) {
             run_begin(&u[i], p[a + i], &o[a + i]);
             live[i] = i;
@@ -166,10 +185,26 @@ void ism_sing_newton_lanes(const ism_tape *t, ism_eval_ws *ws, double (*p)[3],
                 memcpy(v->r.grad, g[j], sizeof g[j]);
                 memcpy(v->r.hess, h[j], sizeof h[j]);
                 run_took_jet(v);
-                if (run_step(v))
+                if (run_wants_step(v)) {
+                    if (keep != j) {
+                        memcpy(g[keep], g[j], sizeof g[j]);
+                        memcpy(h[keep], h[j], sizeof h[j]);
+                    }
+                    rel[keep] = v->o->rel;
+                    trust[keep] = v->o->trust;
                     live[keep++] = live[j];
+                }
             }
-            nl = keep;
+            ism_sym3_pinv_lanes((const double (*)[3])g, (const double (*)[6])h, rel, trust, step,
+                                ok, keep);
+            nl = 0;
+            for (size_t j = 0; j < keep; j++) {
+                run *v = &u[live[j]];
+                if (ok[j])
+                    memcpy(v->step, step[j], sizeof step[j]);
+                if (run_move(v, ok[j]))
+                    live[nl++] = live[j];
+            }
         }
         for (size_t i = 0; i < m; i++)
             r[a + i] = u[i].r;

@@ -803,7 +803,8 @@ static const ism_lbox *shared_from(const keyed_box *boxes, size_t a, size_t i)
  * the rule then applied in key order. The runs of candidates that then share are spent
  * for nothing (459 of 3,110 candidates on the Klein bottle at E 0.00327, 73 of 720 on
  * Barth's sextic at 0.0259), and still the runs cost less side by side: the Klein bottle's
- * 39.7M instructions one by one -> 32.6M. Past the deadline or cancelled: centres and their
+ * 44.8M instructions one by one -> 27.8M (their Hessians batched and their pseudo-inverse
+ * steps four at a time, sym3_lanes.h). Past the deadline or cancelled: centres and their
  * ranks only (a spent box budget stops the subdivision, not this); w->evals_jet counts every
  * Hessian taken, spent ones too. */
 static void project_run(void *ctx, size_t task, int thread)

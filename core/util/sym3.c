@@ -8,10 +8,6 @@
 #include <math.h>
 #include <string.h>
 
-/* Sweeps of three rotations: Jacobi converges quadratically, 3×3 needs at most ~6; the cap
- * only guards against NaN input. */
-#define SYM3_MAX_SWEEPS 32
-
 /* Inlined into the sweep with constant p, q (its three calls) and its loops unrolled by
  * pragma (gcc -O2 keeps them rolled), so the indexing folds away; the same operations in the
  * same order. The singular search's Newton steps spend most of their pseudo-inverse here
@@ -42,19 +38,9 @@ static inline __attribute__((always_inline)) void rotate(double a[3][3], double 
     }
 }
 
-void ism_sym3_eigen(const double h[6], double eig[3], double vec[3][3])
+void ism_sym3_sorted(const double h[6], const double a[3][3], const double v[3][3],
+                     double eig[3], double vec[3][3])
 {
-    double a[3][3] = {{h[0], h[1], h[2]}, {h[1], h[3], h[4]}, {h[2], h[4], h[5]}};
-    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    for (int sweep = 0; sweep < SYM3_MAX_SWEEPS; sweep++) {
-        double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
-        double diag = fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
-        if (!(off > 1e-300) || off <= 1e-18 * diag)
-            break;
-        rotate(a, v, 0, 1);
-        rotate(a, v, 0, 2);
-        rotate(a, v, 1, 2);
-    }
     int order[3] = {0, 1, 2};
     for (int i = 0; i < 3; i++) /* three-element insertion sort by eigenvalue */
         for (int j = i; j > 0 && a[order[j]][order[j]] < a[order[j - 1]][order[j - 1]]; j--) {
@@ -75,6 +61,22 @@ void ism_sym3_eigen(const double h[6], double eig[3], double vec[3][3])
         }
 }
 
+void ism_sym3_eigen(const double h[6], double eig[3], double vec[3][3])
+{
+    double a[3][3] = {{h[0], h[1], h[2]}, {h[1], h[3], h[4]}, {h[2], h[4], h[5]}};
+    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int sweep = 0; sweep < ISM_SYM3_MAX_SWEEPS; sweep++) {
+        double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
+        double diag = fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
+        if (!(off > 1e-300) || off <= 1e-18 * diag)
+            break;
+        rotate(a, v, 0, 1);
+        rotate(a, v, 0, 2);
+        rotate(a, v, 1, 2);
+    }
+    ism_sym3_sorted(h, (const double (*)[3])a, (const double (*)[3])v, eig, vec);
+}
+
 int ism_sym3_rank(const double eig[3], double rel)
 {
     double m = fmax(fabs(eig[0]), fmax(fabs(eig[1]), fabs(eig[2])));
@@ -86,12 +88,13 @@ int ism_sym3_rank(const double eig[3], double rel)
 
 /* Loops over the three directions are unrolled by pragma here and in search.c's interval
  * tests (gcc -O2 keeps them rolled): the heart's singular stage -1M instructions (this step
- * lived in core/singular/newton.c until the octree's critical-radius test shared it). */
-bool ism_sym3_pinv_step(const double g[3], const double h[6], double rel, double trust,
-                        double step[3])
+ * lived in core/singular/newton.c until the octree's critical-radius test shared it). Inlined
+ * into both callers below. */
+static inline __attribute__((always_inline)) bool pinv_of(const double g[3],
+                                                          const double eig[3],
+                                                          const double vec[3][3], double rel,
+                                                          double trust, double step[3])
 {
-    double eig[3], vec[3][3];
-    ism_sym3_eigen(h, eig, vec);
     double big = fmax(fabs(eig[0]), fmax(fabs(eig[1]), fabs(eig[2])));
     if (!(big > 0.0) || !isfinite(big))
         return false;
@@ -125,4 +128,18 @@ bool ism_sym3_pinv_step(const double g[3], const double h[6], double rel, double
         _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
             step[k] = part[0][k];
     return isfinite(step[0]) && isfinite(step[1]) && isfinite(step[2]);
+}
+
+bool ism_sym3_pinv_step(const double g[3], const double h[6], double rel, double trust,
+                        double step[3])
+{
+    double eig[3], vec[3][3];
+    ism_sym3_eigen(h, eig, vec);
+    return pinv_of(g, eig, (const double (*)[3])vec, rel, trust, step);
+}
+
+bool ism_sym3_pinv_of(const double g[3], const double eig[3], const double vec[3][3],
+                      double rel, double trust, double step[3])
+{
+    return pinv_of(g, eig, vec, rel, trust, step);
 }

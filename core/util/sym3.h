@@ -11,6 +11,16 @@
  * Non-finite input gives NaN eigenvalues. */
 void ism_sym3_eigen(const double h[6], double eig[3], double vec[3][3]);
 
+/* Sweeps of three rotations: Jacobi converges quadratically, 3×3 needs at most ~6; the cap
+ * only guards against NaN input. */
+#define ISM_SYM3_MAX_SWEEPS 32
+
+/* The end of ism_sym3_eigen, for one that ran the sweeps elsewhere (core/singular/
+ * sym3_lanes.c: four matrices side by side): a and v, the swept matrix and the rotations'
+ * product (its columns the eigenvectors), into eig and vec as ism_sym3_eigen leaves them. */
+void ism_sym3_sorted(const double h[6], const double a[3][3], const double v[3][3],
+                     double eig[3], double vec[3][3]);
+
 /* step = -H⁺ g (h = xx xy xz yy yz zz) over the eigen-directions of H whose eigenvalues are
  * above rel of the largest in magnitude — and, while the step is longer than trust, over one
  * direction fewer (smallest |λ| dropped first): near a curve or sheet of zeros of ∇f, H's
@@ -20,6 +30,10 @@ void ism_sym3_eigen(const double h[6], double eig[3], double vec[3][3]);
  * singular stage (core/singular/newton.h) and the octree's critical radius (turned.h). */
 bool ism_sym3_pinv_step(const double g[3], const double h[6], double rel, double trust,
                         double step[3]);
+
+/* The same step from ism_sym3_eigen's eig and vec of H. */
+bool ism_sym3_pinv_of(const double g[3], const double eig[3], const double vec[3][3],
+                      double rel, double trust, double step[3]);
 
 /* Numerical rank: eigenvalues with |λ| > rel × max |λ| (0 for the zero matrix). */
 int ism_sym3_rank(const double eig[3], double rel);

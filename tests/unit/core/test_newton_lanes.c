@@ -8,13 +8,22 @@
  * (ISM_SING_NEWTON_LANES), so a second pass of lanes runs too. A jet given to the wrong lane,
  * or a lane dropped or kept a pass too long, moves a point or a count here. The Klein bottle
  * (its double curve), Steiner's Roman surface (three double lines through a triple point),
- * Kummer's 16 nodes and the cross-cap, in the three placements (pf_sweep_box). */
+ * Kummer's 16 nodes and the cross-cap, in the three placements (pf_sweep_box).
+ *
+ * And the pseudo-inverse step in lanes (sym3_lanes.h) against ism_sym3_pinv_step on
+ * matrices chosen to take every path of the sweeps: random ones over many scales, diagonal
+ * ones (no rotation), ones with a zero off-diagonal entry (a rotation skipped in one lane
+ * only), equal diagonals (theta = 0), multiples of I and I plus a rank-one term (equal
+ * eigenvalues), subnormal and huge
+ * entries, NaN and infinity (no step), the zero matrix; a count not a multiple of four. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <string.h>
 #include "poly_fixture.h"
 #include "test_eval_surfaces.h"
 #include "core/singular/newton.h"
+#include "core/singular/sym3_lanes.h"
+#include "core/util/sym3.h"
 
 /* Starts per surface and placement: over two passes of lanes. */
 #define LANES_RUNS (2 * ISM_SING_NEWTON_LANES + 22)
@@ -115,4 +124,61 @@ Test(newton_lanes, cross_cap)
     const double box[6] = { -1.3, -1.3, -1.6, 1.3, 1.3, 1.4 };
     expect_lanes_as_runs(t, "cross-cap", box);
     ism_tape_free(t);
+}
+
+/* Matrix i of the pinv_lanes set (see the top). */
+static void pick_matrix(int i, test_rng *rng, double h[6])
+{
+    double scale = pow(10.0, test_uniform(rng, -12.0, 12.0));
+    for (int k = 0; k < 6; k++)
+        h[k] = scale * test_uniform(rng, -1.0, 1.0);
+    switch (i % 9) {
+    case 1: h[1] = h[2] = h[4] = 0.0; break;                     /* diagonal */
+    case 2: h[1 + (i / 9) % 2 * 3] = 0.0; break;                 /* xy or yz already 0 */
+    case 3: /* equal diagonal: scale I, or a first rotation at theta = 0 */
+        h[0] = h[3] = h[5] = scale;
+        if ((i / 9) % 2)
+            h[1] = h[2] = h[4] = 0.0;
+        break;
+    case 4: {                                                    /* I + u uᵀ */
+        double u[3] = { h[0], h[1], h[2] };
+        h[0] = 1.0 + u[0] * u[0]; h[1] = u[0] * u[1]; h[2] = u[0] * u[2];
+        h[3] = 1.0 + u[1] * u[1]; h[4] = u[1] * u[2]; h[5] = 1.0 + u[2] * u[2];
+        break;
+    }
+    case 5: h[(i / 9) % 6] = (i / 9) % 2 ? NAN : INFINITY; break;
+    case 6: for (int k = 0; k < 6; k++) h[k] *= 1e-300; break;   /* subnormal products */
+    case 7: for (int k = 0; k < 6; k++) h[k] = 0.0; break;
+    case 8: h[5] = h[0] * h[3] > 0 ? 1e-14 * h[5] : h[5]; break; /* nearly singular */
+    default: break;
+    }
+}
+
+Test(newton_lanes, pinv_lanes_as_scalar)
+{
+    enum { N = 4 * 9 * 7 + 3 };
+    static double g[N][3], h[N][6], rel[N], trust[N], step[N][3];
+    static bool ok[N];
+    test_rng rng = { 2929 };
+    for (int i = 0; i < N; i++) {
+        pick_matrix(i, &rng, h[i]);
+        for (int k = 0; k < 3; k++)
+            g[i][k] = test_uniform(&rng, -1.0, 1.0);
+        rel[i] = i % 2 ? ISM_SING_PINV_REL : ISM_SING_PINV_REL_POINT;
+        trust[i] = i % 3 ? INFINITY : test_uniform(&rng, 1e-6, 1.0);
+    }
+    ism_sym3_pinv_lanes((const double (*)[3])g, (const double (*)[6])h, rel, trust, step, ok, N);
+    int stepped = 0, refused = 0;
+    for (int i = 0; i < N; i++) {
+        double s[3];
+        bool want = ism_sym3_pinv_step(g[i], h[i], rel[i], trust[i], s);
+        cr_expect_eq(ok[i], want, "matrix %d (kind %d): ok %d, one by one %d", i, i % 9, ok[i],
+                     want);
+        if (want && ok[i])
+            cr_expect(!memcmp(s, step[i], sizeof s), "matrix %d (kind %d): step", i, i % 9);
+        stepped += want;
+        refused += !want;
+    }
+    cr_expect_gt(stepped, N / 2, "%d steps", stepped);
+    cr_expect_gt(refused, 20, "%d refused", refused);
 }
