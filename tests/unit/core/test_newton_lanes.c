@@ -93,29 +93,20 @@ static void expect_lanes_as_runs(const ism_tape *t, const char *name, const doub
     ism_eval_ws_free(ws);
 }
 
-Test(newton_lanes, klein_bottle)
+/* expect_lanes_as_runs on the test gallery's surface called name, in its box. */
+static void gallery_lanes_as_runs(const char *name)
 {
-    const test_surface *s = test_surface_named("klein-bottle");
+    const test_surface *s = test_surface_named(name);
     ism_tape *t = test_surface_compile(s);
     expect_lanes_as_runs(t, s->name, s->box);
     ism_tape_free(t);
 }
 
-Test(newton_lanes, steiner_roman)
-{
-    const test_surface *s = test_surface_named("steiner-roman");
-    ism_tape *t = test_surface_compile(s);
-    expect_lanes_as_runs(t, s->name, s->box);
-    ism_tape_free(t);
-}
+Test(newton_lanes, klein_bottle) { gallery_lanes_as_runs("klein-bottle"); }
 
-Test(newton_lanes, kummer_16_nodes)
-{
-    const test_surface *s = test_surface_named("kummer-16-nodes");
-    ism_tape *t = test_surface_compile(s);
-    expect_lanes_as_runs(t, s->name, s->box);
-    ism_tape_free(t);
-}
+Test(newton_lanes, steiner_roman) { gallery_lanes_as_runs("steiner-roman"); }
+
+Test(newton_lanes, kummer_16_nodes) { gallery_lanes_as_runs("kummer-16-nodes"); }
 
 Test(newton_lanes, cross_cap)
 {
