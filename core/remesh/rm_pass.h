@@ -310,6 +310,13 @@ size_t rm_horn_tips(rm_pass *p, const ism_remesh_options *o, bool *ok);
  * every new triangle keeps to its own sheet (rm_junction.c); returns the collapses made
  * (they count in collapses). *ok false when out of memory. */
 size_t rm_junction_collapse(rm_pass *p, bool *ok);
+/* Where a junction's vertex J (rm_junction_vertex_on) keeps a needle J–c–w with c a crowd
+ * vertex on one crease a hair from J and no vertex on another crease beside it: the vertex
+ * across c–w goes onto that crease, c slides out along its own and c–w flips to the
+ * junction, measured as one operation and undone unless J's smallest angle grows with none
+ * about it thinner or farther from f = 0 (rm_junction_fan.c). Returns the operations kept
+ * (they count in flips). *ok false when out of memory. */
+size_t rm_junction_fan_mend(rm_pass *p, bool *ok);
 /* The sheets that ∇f's unit normals at some vertices fall into, each group's first normal
  * and its tangent plane's offset (n · x at that vertex): a normal more than the crease angle
  * (ISM_RM_CREASE_DEG) from every group's starts a new one. Two on a crease, three or more at
