@@ -137,33 +137,40 @@ static bool has_nan(const double p[3])
     return p[0] != p[0] || p[1] != p[1] || p[2] != p[2];
 }
 
-/* The few ends (ne ≤ FEW_ENDS) into order[0 .. ne) by their points' values, ends ascending
+/* The few ends (ne ≤ FEW_ENDS) into order[0 .. ne), their points into at[0 .. ne), by the
+ * points' values, ends ascending
  * among equal values: the points in the order each first appears, where cmp_end's sort puts
  * them in coordinate order. Only where the ends meet is read (build_graph groups the ends of
  * one point, and what a group does never depends on the others'), and a group's ends keep
  * cmp_end's order, -0 and 0 interleaved by end as it leaves them. False when a coordinate is
  * NaN (cmp_end's order is then no order, and what the sort leaves depends on how it sorts):
  * the caller sorts, as before. */
-static bool grouped_ends(const ism_flines *l, size_t ne, int *order)
+static bool grouped_ends(const ism_flines *l, size_t ne, int *order, const ism_fpoint **at)
 {
+    const ism_fpoint *ep[FEW_ENDS];
     const double *rep[FEW_ENDS]; /* each distinct value's first point */
     int cls[FEW_ENDS], count[FEW_ENDS + 1] = {0}, nc = 0;
     for (size_t e = 0; e < ne; e++) {
-        const double *p = end_point(l, (int)e)->p;
-        if (has_nan(p))
-            return false;
+        ep[e] = end_point(l, (int)e);
+        const double *p = ep[e]->p;
         int c = 0;
         while (c < nc && !(rep[c][0] == p[0] && rep[c][1] == p[1] && rep[c][2] == p[2]))
             c++;
-        if (c == nc)
+        if (c == nc) { /* a NaN point equals none: it starts a value of its own */
+            if (has_nan(p))
+                return false;
             rep[nc++] = p;
+        }
         cls[e] = c;
         count[c + 1]++;
     }
     for (int c = 0; c < nc; c++)
         count[c + 1] += count[c];
-    for (size_t e = 0; e < ne; e++)
-        order[count[cls[e]]++] = (int)e;
+    for (size_t e = 0; e < ne; e++) {
+        int k = count[cls[e]]++;
+        order[k] = (int)e;
+        at[k] = ep[e];
+    }
     return true;
 }
 
@@ -173,16 +180,19 @@ static bool build_graph(graph *g, const ism_flines *l)
 {
     size_t ne = 2 * l->n;
     int order_in[FEW_ENDS], *order = order_in;
+    const ism_fpoint *at_in[FEW_ENDS], **at = at_in; /* the ends' points, in order */
     g->l = l;
     g->heap = ne > FEW_ENDS;
     if (g->heap) {
         order = malloc(ne * sizeof *order);
+        at = malloc(ne * sizeof *at);
         g->node = malloc(ne * sizeof *g->node);
         g->partner = malloc(ne * sizeof *g->partner);
         g->terminal = calloc(ne, sizeof *g->terminal);
         g->used = calloc(l->n, sizeof *g->used);
-        if (!order || !g->node || !g->partner || !g->terminal || !g->used) {
+        if (!order || !at || !g->node || !g->partner || !g->terminal || !g->used) {
             free(order);
+            free(at);
             return false; /* the caller's free_graph frees the others */
         }
     } else {
@@ -193,18 +203,21 @@ static bool build_graph(graph *g, const ism_flines *l)
     }
     for (size_t e = 0; e < ne; e++)
         g->partner[e] = -1;
-    if ((g->heap || !grouped_ends(l, ne, order)) && !sorted_ends(l, ne, order)) {
+    bool ordered = !g->heap && grouped_ends(l, ne, order, at);
+    if (!ordered && !sorted_ends(l, ne, order)) {
         if (order != order_in)
-            free(order);
+            free(order), free(at);
         return false;
     }
+    for (size_t i = 0; !ordered && i < ne; i++)
+        at[i] = end_point(l, order[i]);
     /* a point: a run of ends whose points are the same bits (cmp_end's order puts -0 and 0
      * together, which this parts again) */
     g->npoints = 0;
     for (size_t i = 0; i < ne;) {
-        const double *p = end_point(l, order[i])->p;
+        const double *p = at[i]->p;
         size_t j = i + 1;
-        while (j < ne && memcmp(end_point(l, order[j])->p, p, 3 * sizeof *p) == 0)
+        while (j < ne && memcmp(at[j]->p, p, 3 * sizeof *p) == 0)
             j++;
         int pt = g->npoints++;
         bool shared = false;
@@ -212,7 +225,7 @@ static bool build_graph(graph *g, const ism_flines *l)
             g->node[order[k]] = pt;
             shared |= is_shared(l, order[k]);
             /* a singular point ends chains too: each sheet's polygon passes it once */
-            shared |= (end_point(l, order[k])->flags & ISM_FP_SINGULAR) != 0;
+            shared |= (at[k]->flags & ISM_FP_SINGULAR) != 0;
         }
         g->terminal[pt] = shared;
         if (!shared)
@@ -220,7 +233,7 @@ static bool build_graph(graph *g, const ism_flines *l)
         i = j;
     }
     if (order != order_in)
-        free(order);
+        free(order), free(at);
     return true;
 }
 
