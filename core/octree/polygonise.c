@@ -148,12 +148,35 @@ static void report(void *ctx, double fraction)
     pthread_mutex_unlock(&p->lock);
 }
 
+/* Under max_error, where no leaf is polygonised twice (the crease cut on: no fold test's
+ * retry) and nothing moves the vertices, a leaf's triangles are measured with the next
+ * leaves' (ism_emitted_errors: a leaf measures ~9 points, the batched gradient evaluator's
+ * passes take 16 and cost nearly as much for fewer): the leaves polygonised since the last
+ * measuring are measured once they hold PENDING_TRIANGLES triangles, or PENDING_LEAVES
+ * leaves (the room kept), or the chunk ends. A leaf's figure reaches nothing another leaf's
+ * polygons read (the memos it fills are exact: crease_memo.h, sampler.h's label memo), so
+ * the meshes are those measured leaf by leaf. */
+#define PENDING_LEAVES 32
+#define PENDING_TRIANGLES 48
+
+/* A leaf polygonised and not yet measured: where its output went (ism_leaf_rec's fields
+ * but its triangles, which its span holds) and the counters it added. */
+typedef struct pending_leaf {
+    size_t i, v0, s0, nverts, nsegs;
+    ism_cell_stats added;
+} pending_leaf;
+
 /* A thread's context in cache lines of its own: the counters and scratch lengths a thread
  * writes for every node and evaluation do not share a line with another thread's. */
 typedef struct padded_ctx {
     alignas(ISM_CACHE_LINE) ism_cell_ctx c;
     uint64_t unflat;             /* ism_poly_stats.unflat_nodes, this thread's */
     double unflat_worst;
+    /* the leaves waiting to be measured (PENDING_LEAVES) and their triangles */
+    ism_leaf_span span[PENDING_LEAVES];
+    pending_leaf pending[PENDING_LEAVES];
+    size_t npending, pending_tris;
+    ism_measure_scratch measure;
 } padded_ctx;
 
 typedef struct phase2 {
@@ -289,8 +312,67 @@ static bool leaf_again(phase2 *p, ism_cell_ctx *cx, size_t i, ism_cell_out *out,
     return leaf_measured(p, cx, i, out, v0, t0, false, e, &unresolved);
 }
 
+/* The pending leaves of chunk (all in out) measured as leaf_measured measures them with
+ * fold_test off: their figures into p->leaf_error (and p->rec). */
+static bool measure_pending(phase2 *p, padded_ctx *pc, size_t chunk, const ism_cell_out *out)
+{
+    ism_sampler *s = &pc->c.s;
+    size_t n = pc->npending;
+    pc->npending = pc->pending_tris = 0;
+    if (!n)
+        return true;
+    if (!ism_emitted_errors(s, out, pc->span, n, &pc->measure))
+        return false;
+    double E = p->o->max_error;
+    for (size_t k = 0; k < n; k++) {
+        const ism_leaf_span *sp = &pc->span[k];
+        const pending_leaf *pl = &pc->pending[k];
+        ism_cell_out view = *out; /* the leaf's triangles end its output, as they did */
+        view.ntris = sp->t1;
+        double e = sp->err;
+        ism_sampler_leaf_set(s, &sp->leaf);
+        if (leaf_may_split(p, pl->i) && e <= E &&
+            ism_crease_unresolved(s, &view, sp->t0, E,
+                                  (const double(*)[3])(pc->measure.cg + sp->cg0)))
+            e = INFINITY;
+        float err = (float)e;
+        p->leaf_error[pl->i] = err;
+        if (p->rec)
+            p->rec[pl->i] = (ism_leaf_rec){chunk, pl->v0, sp->t0, pl->s0, pl->nverts,
+                                           sp->t1 - sp->t0, pl->nsegs, err, pl->added};
+    }
+    s->local = NULL;
+    s->local_decided = false;
+    return true;
+}
+
+/* Leaf i (sampler set on it; its output from v0, t0, s0 on; its stats were *before)
+ * polygonised and cut along a CSG crease, its measuring left pending (PENDING_LEAVES). */
+static bool defer_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell_out *out,
+                       size_t v0, size_t t0, size_t s0, const ism_cell_stats *before)
+{
+    ism_cell_ctx *cx = &pc->c;
+    bool ok = ism_cell_polygonise(cx, p->leaves[i], out) && ism_crease_split(&cx->s, out, t0);
+    if (ok) {
+        size_t k = pc->npending++;
+        pc->span[k] = (ism_leaf_span){.t0 = t0, .t1 = out->ntris};
+        ism_sampler_leaf_get(&cx->s, &pc->span[k].leaf);
+        pc->pending[k] = (pending_leaf){i, v0, s0, out->nverts - v0, out->nsegs - s0,
+                                        p->rec ? ism_cell_stats_minus(&cx->stats, before)
+                                               : (ism_cell_stats){0}};
+        pc->pending_tris += out->ntris - t0;
+    }
+    cx->s.local = NULL;
+    cx->s.local_decided = false;
+    if (!ok)
+        return false;
+    return pc->npending < PENDING_LEAVES && pc->pending_tris < PENDING_TRIANGLES
+               ? true
+               : measure_pending(p, pc, chunk, out);
+}
+
 /* Leaf i of chunk into out: copied from the last round when it emits the same there, else
- * polygonised (and measured under max_error). */
+ * polygonised (and measured under max_error, maybe later: defer_leaf). */
 static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell_out *out)
 {
     ism_cell_ctx *cx = &pc->c;
@@ -304,6 +386,8 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
     } else {
         ism_cell_stats before = cx->stats;
         leaf_sampler(cx, p->leaves[i]);
+        if (p->leaf_error && !(p->straddle > 0) && cx->cut_creases && cx->s.batch)
+            return defer_leaf(p, pc, chunk, i, out, v0, t0, s0, &before);
         double e;
         bool unresolved, fold_test = p->leaf_error && !cx->cut_creases;
         bool ok = leaf_measured(p, cx, i, out, v0, t0, fold_test, &e, &unresolved);
@@ -362,8 +446,9 @@ static void run_chunk(void *arg, size_t chunk, int thread)
         atomic_store(&p->status, ISM_POLY_NO_MEMORY);
         return;
     }
-    for (size_t i = first; i < last; i++)
-        if (!one_leaf(p, pc, chunk, i, out)) {
+    pc->npending = pc->pending_tris = 0;
+    for (size_t i = first; i <= last; i++)
+        if (!(i < last ? one_leaf(p, pc, chunk, i, out) : measure_pending(p, pc, chunk, out))) {
             atomic_store(&p->status, pc->c.unregistered ? ISM_POLY_INTERNAL : ISM_POLY_NO_MEMORY);
             return;
         }
@@ -680,6 +765,7 @@ done:
         if (p.ctx[t].c.s.ws)
             ism_eval_ws_free(p.ctx[t].c.s.ws);
         ism_cell_ctx_free(&p.ctx[t].c);
+        ism_measure_scratch_free(&p.ctx[t].measure);
     }
     if (!next || !next->n || o->fresh_rounds || status != ISM_POLY_OK) {
         free_caches(c); /* no round follows, or it starts afresh */

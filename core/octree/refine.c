@@ -1,4 +1,5 @@
-/* refine.c — measuring a leaf's emitted triangles and the split set (see refine.h). */
+/* refine.c — measuring a leaf's emitted triangles (one leaf, or several leaves' at once)
+ * and the split set (see refine.h). */
 #include "core/octree/refine.h"
 #include "core/octree/sample_dist.h"
 #include "core/util/grow.h"
@@ -25,7 +26,7 @@ static bool has_side(const uint32_t *t, uint32_t a, uint32_t b)
 #define MEASURE_BATCH ISM_GRAD_BATCH
 
 /* A point to measure and the corners of its element (a triangle's or a side's). */
-typedef struct measured {
+typedef struct ism_measured {
     const double *v[3];
     int n;
 } measured;
@@ -90,6 +91,105 @@ double ism_emitted_error_kept(ism_sampler *s, const ism_cell_out *out, size_t fi
                 worst = fmax(worst, ism_dist_beyond(s, p[i], plain[i], m[i].v, m[i].n));
     }
     return worst;
+}
+
+/* Room for n points in w (its contents not kept). */
+static bool reserve(ism_measure_scratch *w, size_t n)
+{
+    if (n <= w->cap)
+        return true;
+    ism_measure_scratch_free(w);
+    size_t cap = n < 256 ? 256 : 2 * n;
+    w->m = malloc(cap * sizeof *w->m);
+    w->p = malloc(cap * sizeof *w->p);
+    w->g = malloc(cap * sizeof *w->g);
+    w->x = malloc(cap * sizeof *w->x);
+    w->gx = malloc(cap * sizeof *w->gx);
+    w->cg = malloc(cap * sizeof *w->cg);
+    w->f = malloc(cap * sizeof *w->f);
+    w->fx = malloc(cap * sizeof *w->fx);
+    w->plain = malloc(cap * sizeof *w->plain);
+    w->tape = malloc(cap * sizeof *w->tape);
+    w->step = malloc(cap * sizeof *w->step);
+    if (!w->m || !w->p || !w->g || !w->x || !w->gx || !w->cg || !w->f || !w->fx ||
+        !w->plain || !w->tape || !w->step) {
+        ism_measure_scratch_free(w);
+        return false;
+    }
+    w->cap = cap;
+    return true;
+}
+
+void ism_measure_scratch_free(ism_measure_scratch *w)
+{
+    free(w->m), free(w->p), free(w->g), free(w->x), free(w->gx), free(w->cg);
+    free(w->f), free(w->fx), free(w->plain), free(w->tape), free(w->step);
+    memset(w, 0, sizeof *w);
+}
+
+/* Every leaf's points into w in ism_emitted_error_kept's order (leaf[k]'s from p0 to p1),
+ * each with its leaf's tape there, each triangle's centroid's index in w->step; their
+ * count. */
+static size_t gather(ism_sampler *s, const ism_cell_out *out, ism_leaf_span *leaf, size_t n,
+                     ism_measure_scratch *w)
+{
+    size_t np = 0, ntri = 0;
+    for (size_t k = 0; k < n; k++) {
+        ism_sampler_leaf_set(s, &leaf[k].leaf);
+        leaf[k].cg0 = ntri;
+        leaf[k].p0 = np;
+        for (size_t t = leaf[k].t0; t < leaf[k].t1; t++) {
+            w->step[ntri++] = np;
+            int tp = tri_points(out, leaf[k].t0, t, w->p + np, w->m + np);
+            for (int j = 0; j < tp; j++, np++)
+                w->tape[np] = ism_sampler_tape_at(s, w->p[np]);
+        }
+        leaf[k].p1 = np;
+    }
+    return np;
+}
+
+bool ism_emitted_errors(ism_sampler *s, const ism_cell_out *out, ism_leaf_span *leaf,
+                        size_t n, ism_measure_scratch *w)
+{
+    size_t most = 0, ntri = 0;
+    for (size_t k = 0; k < n; k++)
+        most += 4 * (leaf[k].t1 - leaf[k].t0);
+    if (!reserve(w, most))
+        return false;
+    size_t np = gather(s, out, leaf, n, w);
+    for (size_t k = 0; k < n; k++)
+        ntri += leaf[k].t1 - leaf[k].t0;
+    ism_sample_grad_tapes(s, w->tape, (const double (*)[3])w->p, w->f, w->g, np);
+    for (size_t t = 0; t < ntri; t++) /* step[t]: triangle t's centroid (gather) */
+        memcpy(w->cg[t], w->g[w->step[t]], sizeof w->g[0]);
+    /* ism_plain_dists' first halves, point by point; the second steps of all leaves at once,
+       each on its leaf's tape at the foot */
+    double e = s->dist_above;
+    size_t m = 0;
+    for (size_t k = 0; k < n; k++) {
+        ism_sampler_leaf_set(s, &leaf[k].leaf);
+        for (size_t i = leaf[k].p0; i < leaf[k].p1; i++) {
+            w->plain[i] = ism_first_order_dist(w->f[i], w->g[i]);
+            if (ism_first_order_unsure(w->plain[i], e)) {
+                ism_newton_foot(w->p[i], w->f[i], w->g[i], w->x[m]);
+                w->tape[m] = ism_sampler_tape_at(s, w->x[m]);
+                w->step[m++] = i;
+            }
+        }
+    }
+    ism_sample_grad_tapes(s, w->tape, (const double (*)[3])w->x, w->fx, w->gx, m);
+    for (size_t j = 0; j < m; j++)
+        w->plain[w->step[j]] = ism_stepped_dist(w->plain[w->step[j]], w->fx[j], w->gx[j]);
+    /* each point's figure in order (ism_dist_beyond may search from it, on its leaf) */
+    for (size_t k = 0; k < n; k++) {
+        ism_sampler_leaf_set(s, &leaf[k].leaf);
+        double worst = 0;
+        for (size_t i = leaf[k].p0; i < leaf[k].p1; i++)
+            worst = fmax(worst, ism_dist_beyond(s, w->p[i], w->plain[i], w->m[i].v, w->m[i].n));
+        leaf[k].err = worst;
+    }
+    return true;
 }
 
 /* A node's origin is below 2^ISM_GRID_MAX_DEPTH (19 bits a coordinate), the level fits in 5. */

@@ -25,6 +25,36 @@ double ism_emitted_error(ism_sampler *s, const ism_cell_out *out, size_t first_t
 double ism_emitted_error_kept(ism_sampler *s, const ism_cell_out *out, size_t first_tri,
                               double bound, double (*centroid_g)[3]);
 
+/* A leaf among those ism_emitted_errors measures together: its triangles out->tris[3 t0 ..
+ * 3 t1), the sampler's leaf while it was polygonised; and what was measured: err (what
+ * ism_emitted_error_kept gives under INFINITY) and its triangles' centroid gradients, rows
+ * cg0 .. cg0 + t1 - t0 of the scratch's cg. */
+typedef struct ism_leaf_span {
+    size_t t0, t1;
+    ism_sampler_leaf leaf;
+    size_t cg0;
+    double err;
+    size_t p0, p1; /* its points in the scratch (ism_emitted_errors' own) */
+} ism_leaf_span;
+
+/* ism_emitted_errors' arrays, kept between calls (ism_measure_scratch_free); zeroed: none. */
+typedef struct ism_measure_scratch {
+    struct ism_measured *m;
+    double (*p)[3], (*g)[3], (*x)[3], (*gx)[3], (*cg)[3], *f, *fx, *plain;
+    const ism_tape **tape;
+    size_t *step;
+    size_t cap;
+} ism_measure_scratch;
+
+/* ism_emitted_error_kept(s, out viewed up to leaf[k].t1, leaf[k].t0, INFINITY, its rows of
+ * w->cg) of every leaf k < n into leaf[k].err: the same figures bit for bit, the points of
+ * all n leaves evaluated together (ism_sample_grad_tapes: each on its own leaf's tape, fuller
+ * passes of the batched evaluator than one leaf's ~9 points make). The sampler's leaf is
+ * left as the last one's. False when out of memory. */
+bool ism_emitted_errors(ism_sampler *s, const ism_cell_out *out, ism_leaf_span *leaf,
+                        size_t n, ism_measure_scratch *w);
+void ism_measure_scratch_free(ism_measure_scratch *w);
+
 /* A node's identity across rounds (its level and lattice origin). */
 uint64_t ism_node_key(const ism_node *nd);
 /* The key's node: its lattice origin into org, its level returned. */

@@ -1,6 +1,7 @@
 /* sampler.c — the sampler's batched gradients (sampler.h): a group of points split by the
- * tape that holds at each (the leaf's shortened one inside its box, f's elsewhere), each part
- * evaluated in one pass over its tape. */
+ * tape that holds at each (the leaf's shortened one inside its box, f's elsewhere; or, for
+ * several leaves' points, each point's own leaf's), each part evaluated in passes over its
+ * tape. */
 #include "core/octree/sampler.h"
 
 /* Lanes per pass, at most: the evaluator's unrolled width (ISM_GRAD_UNROLLED, eval.h; a
@@ -12,8 +13,27 @@
  * anything measured. */
 #define SAMPLE_LANES ISM_GRAD_UNROLLED
 
+/* The lanes idx[0..m) of p (1 <= m <= SAMPLE_LANES), all on tape t, in one pass. */
+static void tape_pass(ism_sampler *s, const ism_tape *t, const double (*p)[3], double *f,
+                      double (*g)[3], const size_t *idx, size_t m)
+{
+    double x[SAMPLE_LANES], y[SAMPLE_LANES], z[SAMPLE_LANES], fv[SAMPLE_LANES];
+    double gv[SAMPLE_LANES][3];
+    size_t j = 0;
+    do { /* m >= 1 */
+        const double *q = p[idx[j]];
+        x[j] = q[0], y[j] = q[1], z[j] = q[2];
+    } while (++j < m);
+    ism_eval_gradient_batch(t, s->ws, x, y, z, fv, gv, m);
+    for (j = 0; j < m; j++) {
+        size_t i = idx[j];
+        f[i] = fv[j];
+        g[i][0] = gv[j][0], g[i][1] = gv[j][1], g[i][2] = gv[j][2];
+    }
+}
+
 /* One pass over at most SAMPLE_LANES points: the lanes whose tape is `local` first, then the
- * others, each group gathered into coordinate arrays and scattered back. */
+ * others. */
 static void sample_chunk(ism_sampler *s, const double (*p)[3], double *f, double (*g)[3],
                          size_t n)
 {
@@ -23,24 +43,10 @@ static void sample_chunk(ism_sampler *s, const double (*p)[3], double *f, double
             idx[--nf] = i;
         else
             idx[nl++] = i;
-    for (int part = 0; part < 2; part++) {
-        size_t lo = part ? nl : 0, hi = part ? n : nl, m = hi - lo;
-        if (!m)
-            continue;
-        const ism_tape *t = part ? s->tape : s->local;
-        double x[SAMPLE_LANES], y[SAMPLE_LANES], z[SAMPLE_LANES], fv[SAMPLE_LANES];
-        double gv[SAMPLE_LANES][3];
-        for (size_t j = 0; j < m; j++) {
-            const double *q = p[idx[lo + j]];
-            x[j] = q[0], y[j] = q[1], z[j] = q[2];
-        }
-        ism_eval_gradient_batch(t, s->ws, x, y, z, fv, gv, m);
-        for (size_t j = 0; j < m; j++) {
-            size_t i = idx[lo + j];
-            f[i] = fv[j];
-            g[i][0] = gv[j][0], g[i][1] = gv[j][1], g[i][2] = gv[j][2];
-        }
-    }
+    if (nl)
+        tape_pass(s, s->local, p, f, g, idx, nl);
+    if (nl < n)
+        tape_pass(s, s->tape, p, f, g, idx + nl, n - nl);
 }
 
 void ism_sample_grad_batch(ism_sampler *s, const double (*p)[3], double *f, double (*g)[3],
@@ -55,5 +61,31 @@ void ism_sample_grad_batch(ism_sampler *s, const double (*p)[3], double *f, doub
     for (size_t done = 0; done < n; done += SAMPLE_LANES) {
         size_t k = n - done < SAMPLE_LANES ? n - done : SAMPLE_LANES;
         sample_chunk(s, p + done, f + done, g + done, k);
+    }
+}
+
+void ism_sample_grad_tapes(ism_sampler *s, const ism_tape **tape, const double (*p)[3],
+                           double *f, double (*g)[3], size_t n)
+{
+    s->n_gradient += n;
+    if (!s->batch) {
+        for (size_t i = 0; i < n; i++)
+            f[i] = ism_eval_gradient(tape[i], s->ws, p[i][0], p[i][1], p[i][2], g[i]);
+        return;
+    }
+    /* the first point not yet evaluated names the next tape; its points (all after it)
+       are taken SAMPLE_LANES at a time, each taken one's tape cleared */
+    for (size_t i = 0; i < n; i++) {
+        const ism_tape *t = tape[i];
+        for (size_t j = i; t && j < n;) {
+            size_t idx[SAMPLE_LANES], m = 0;
+            for (; j < n && m < SAMPLE_LANES; j++)
+                if (tape[j] == t) {
+                    idx[m++] = j;
+                    tape[j] = NULL;
+                }
+            if (m)
+                tape_pass(s, t, p, f, g, idx, m);
+        }
     }
 }

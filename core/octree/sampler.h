@@ -106,11 +106,46 @@ static inline double ism_sample_grad(ism_sampler *s, const double p[3], double g
     return ism_eval_gradient(ism_sampler_tape_at(s, p), s->ws, p[0], p[1], p[2], g);
 }
 
+/* The sampler's leaf (its local tape, box and crease_split.c's answer for them), kept while
+ * other leaves are polygonised and put back to measure the leaf (polygonise.c's deferred
+ * measuring, refine.h's ism_emitted_errors). */
+typedef struct ism_sampler_leaf {
+    const ism_tape *local, *deciding;
+    double box[6];
+    bool decided;
+} ism_sampler_leaf;
+
+static inline void ism_sampler_leaf_get(const ism_sampler *s, ism_sampler_leaf *l)
+{
+    l->local = s->local;
+    l->deciding = s->local_deciding;
+    l->decided = s->local_decided;
+    for (int k = 0; k < 6; k++)
+        l->box[k] = s->local_box[k];
+}
+
+static inline void ism_sampler_leaf_set(ism_sampler *s, const ism_sampler_leaf *l)
+{
+    s->local = l->local;
+    s->local_deciding = l->deciding;
+    s->local_decided = l->decided;
+    for (int k = 0; k < 6; k++)
+        s->local_box[k] = l->box[k];
+}
+
 /* f and ∇f at p[i] into f[i], g[i] for i < n, each through the tape ism_sample_grad would
  * use there: in batches when s->batch, else one point at a time (the same values bit for
  * bit). */
 void ism_sample_grad_batch(ism_sampler *s, const double (*p)[3], double *f, double (*g)[3],
                            size_t n);
+
+/* f and ∇f at p[i] into f[i], g[i] for i < n through tape[i] (the one ism_sample_grad
+ * would use there for the point's own leaf: points of several leaves measured together):
+ * the points on one tape evaluated together, in passes of at most ISM_GRAD_UNROLLED, so
+ * the same values bit for bit (eval.h) with fewer, fuller passes; one at a time when
+ * !s->batch. tape[] is used up (its entries set to NULL). */
+void ism_sample_grad_tapes(ism_sampler *s, const ism_tape **tape, const double (*p)[3],
+                           double *f, double (*g)[3], size_t n);
 
 /* ism_first_order_dist of f and ∇f at p. */
 static inline double ism_sample_dist(ism_sampler *s, const double p[3])
