@@ -102,6 +102,17 @@ void pf_sweep_box(const double base[6], int d, int which, double box[6])
     sweep_box(base, d, which, irr, box);
 }
 
+ism_grid pf_sweep_grid(const double base[6], int d, int which, double box[6])
+{
+    pf_sweep_box(base, d, which, box);
+    ism_grid g = {d, {0, 0, 0}, {0, 0, 0}};
+    for (int a = 0; a < 3; a++) {
+        g.lo[a] = box[a];
+        g.step[a] = (box[a + 3] - box[a]) / (1 << d);
+    }
+    return g;
+}
+
 void pf_sweep_box_old(const double base[6], int d, int which, double box[6])
 {
     static const double old[3] = {PF_OLD_X, PF_OLD_Y, PF_OLD_Z};

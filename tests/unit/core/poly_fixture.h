@@ -9,6 +9,7 @@
 #include "core/analysis/analysis.h"
 #include "core/expr/expr.h"
 #include "core/mesh/mesh.h"
+#include "core/octree/grid.h"
 #include "core/octree/polygonise.h"
 #include "core/singular/locus.h"
 #include "tests/unit/placements.h"
@@ -102,6 +103,10 @@ bool pf_nm_edges_one_closed_curve(const ism_mesh *m, size_t *nedges);
  * placement (PF_OFF_*), which 1 the irrational one (PF_IRR_* of a finest cell of its own axis at
  * depth d); which −1: base as given (so one loop from −1 runs all three). */
 void pf_sweep_box(const double base[6], int d, int which, double box[6]);
+
+/* The lattice of 2^d steps an axis over base placed by which (pf_sweep_box), its box into box:
+ * the octree's grid (grid.h) for tests that build nodes by hand. */
+ism_grid pf_sweep_grid(const double base[6], int d, int which, double box[6]);
 
 /* pf_sweep_box with which 1 at the old rational placement (PF_OLD_*): only for a regression
  * case named as such (a box where a bug was found, run beside the three placements — today the

@@ -89,12 +89,7 @@ static void sweep(const pf_surface *surf, int placement)
     cr_assert(s.ws && jet);
     const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
     double box[6];
-    pf_sweep_box(base, DEPTH, placement, box);
-    ism_grid g = {DEPTH, {0, 0, 0}, {0, 0, 0}};
-    for (int a = 0; a < 3; a++) {
-        g.lo[a] = box[a];
-        g.step[a] = (box[a + 3] - box[a]) / (1 << DEPTH);
-    }
+    ism_grid g = pf_sweep_grid(base, DEPTH, placement, box);
     ism_flatness fl = flatness(2e-2, box); /* nodes of 0.2: judged by their corners */
     memos m;
     memos_new(&m);

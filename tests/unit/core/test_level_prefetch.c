@@ -79,12 +79,7 @@ static size_t compare(const pf_surface *surf, int placement)
     cr_assert(s.ws);
     const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
     double box[6];
-    pf_sweep_box(base, DEPTH, placement, box);
-    ism_grid g = {DEPTH, {0, 0, 0}, {0, 0, 0}};
-    for (int a = 0; a < 3; a++) {
-        g.lo[a] = box[a];
-        g.step[a] = (box[a + 3] - box[a]) / (1 << DEPTH);
-    }
+    ism_grid g = pf_sweep_grid(base, DEPTH, placement, box);
     const size_t nroots = (size_t)1 << ISM_ROOT_MEMO_BITS;
     ism_point_entry *points = calloc((size_t)1 << ISM_CORNER_MEMO_BITS, sizeof *points);
     ism_root_entry *lanes_memo = calloc(nroots, sizeof *lanes_memo);
