@@ -96,12 +96,21 @@ static void node_corners(const ism_grid *g, thread_state *th, const ism_tape *ta
     int32_t s = ism_grid_cell_steps(g, nd->level);
     const ism_tape *saved = th->s.tape;
     th->s.tape = tape; /* the full tape and a shortened one agree inside the node */
-    int32_t ip[8][3];
-    for (int c = 0; c < 8; c++)
-        for (int a = 0; a < 3; a++) {
-            ip[c][a] = nd->org[a] + ((c >> a) & 1) * s;
-            k->p[c][a] = ism_grid_coord(g, a, ip[c][a]);
-        }
+    int32_t ip[8][3], ia[3][2];
+    double w[3][2]; /* each axis's two lattice and world coordinates, once (as level_prefetch.c's
+                       corners_of: the corner loop with the axis loop inside cost ~220
+                       instructions a node, Barth's sextic at E 0.0259) */
+    for (int a = 0; a < 3; a++) {
+        ia[a][0] = nd->org[a];
+        ia[a][1] = nd->org[a] + s;
+        w[a][0] = ism_grid_coord(g, a, ia[a][0]);
+        w[a][1] = ism_grid_coord(g, a, ia[a][1]);
+    }
+    for (int c = 0; c < 8; c++) {
+        int x = c & 1, y = c >> 1 & 1, z = c >> 2 & 1;
+        ip[c][0] = ia[0][x], ip[c][1] = ia[1][y], ip[c][2] = ia[2][z];
+        k->p[c][0] = w[0][x], k->p[c][1] = w[1][y], k->p[c][2] = w[2][z];
+    }
     ism_point_memo_many(th->corners, ISM_CORNER_MEMO_BITS, (const int32_t (*)[3])ip,
                         (const double (*)[3])k->p, 8, &th->s, k->f, k->g, k->key);
     k->memo = th->memo.roots ? &th->memo : NULL; /* none on the reference path */
