@@ -45,11 +45,19 @@ static int tri_points(const ism_cell_out *out, size_t first_tri, size_t t, doubl
     for (int a = 0; a < 3; a++)
         p[0][a] = (v[0][a] + v[1][a] + v[2][a]) / 3;
     m[0] = (measured){{v[0], v[1], v[2]}, 3};
+    /* which corners the triangle before has: two distinct ones of them make one of its
+       sides (a triangle's every two corners do); a side with both ends one index asks
+       has_side */
+    bool in[3] = {false, false, false};
+    if (t > first_tri)
+        for (int k = 0; k < 3; k++)
+            in[k] = tri[k] == tri[-3] || tri[k] == tri[-2] || tri[k] == tri[-1];
     int np = 1;
     for (int k = 0; k < 3; k++) {
-        if (t > first_tri && has_side(tri - 3, tri[k], tri[(k + 1) % 3]))
+        int k1 = (k + 1) % 3;
+        if (in[k] && in[k1] && (tri[k] != tri[k1] || has_side(tri - 3, tri[k], tri[k1])))
             continue;
-        const double *a = v[k], *b = v[(k + 1) % 3];
+        const double *a = v[k], *b = v[k1];
         for (int c = 0; c < 3; c++)
             p[np][c] = (a[c] + b[c]) / 2;
         m[np++] = (measured){{a, b, NULL}, 2};
