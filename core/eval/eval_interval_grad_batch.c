@@ -11,6 +11,13 @@
  * may use either. Its records (one per lane, interval_jet_ws.h) let the jet over the same
  * box compute only the Hessian, as the scalar pass's record does.
  *
+ * min, max and abs are taken as ism_eval_interval_grad takes them with no branch forced
+ * (eval_interval_jet.c's op_branch), lane by lane: the value the natural enclosure, the
+ * partials those of the branch the lane's box decides, or at a free kink (both branches
+ * allowed) the whole line but in the variables neither operand depends on; each lane's free
+ * kinks are kept in the workspace (ism_ivjet_lane_kinks) as that pass would list them. Tapes
+ * with these give no records (hess_only takes none of them).
+ *
  * Why: the dual mesher takes f and ∇f's natural enclosure over most children of a split
  * node (octree/dual_classify.c, ism_dual_classify_tail); one box costs ~1,700 instructions
  * on the torus's short tape, most of them the instruction dispatch and the zero tests a
@@ -96,10 +103,75 @@ INLINE void each(vj *o, const vj *a, int kind, double c, unsigned w)
         o->d[k] = !(w >> k & 1) ? ivz() : vpick(iz(a->d[k]), a->d[k], lin(a->d[k], kind, c));
 }
 
-/* One instruction of the gradient pass (jet_op with second = 0), on registers r, in jet_op's
- * order of reads and writes (an output register may be an operand's). */
-INLINE void step(const ism_instr *in, vj *r, unsigned w)
+/* ism_iv_whole in every lane */
+INLINE vi ivwhole(void) { return (vi){splat(-INFINITY), splat(INFINITY)}; }
+
+/* op_branch of a min, max or abs with no branch forced (eval_interval_jet.c), lane by lane:
+ * the value iv_min / iv_max / iv_abs; decided_branch's strict tests (a NaN bound decides
+ * nothing); a decided lane takes the branch's partials (take_derivs; abs: +a' or, as
+ * each(lin_neg) does, −a' but where a' is exactly 0, kept as it is), a free one
+ * set_whole_derivs' (0 in a variable neither operand depends on, else the whole line).
+ * Returns the free lanes. */
+INLINE v4i branch(vj *o, const ism_instr *in, const vj *r, unsigned w)
 {
+    const vj *a = &r[in->a];
+    bool rr = in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR;
+    vj cst; /* branch_b's: the constant (RC) or all 0 (abs); partials 0 */
+    cst.v = in->op == ISM_OP_ABS ? ivz() : (vi){splat(in->imm), splat(in->imm)};
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+        cst.d[k] = ivz();
+    const vj *b = rr ? &r[in->b] : &cst;
+    vi av = a->v, bv = b->v;
+    v4i side_a, side_b;
+    switch (in->op) {
+    case ISM_OP_MIN_RR: case ISM_OP_MIN_RC:
+        o->v = (vi){vmin(av.lo, bv.lo), vmin(av.hi, bv.hi)};
+        side_a = (v4i)(av.hi < bv.lo);
+        side_b = (v4i)(bv.hi < av.lo);
+        break;
+    case ISM_OP_MAX_RR: case ISM_OP_MAX_RC:
+        o->v = (vi){vmax(av.lo, bv.lo), vmax(av.hi, bv.hi)};
+        side_a = (v4i)(av.lo > bv.hi);
+        side_b = (v4i)(bv.lo > av.hi);
+        break;
+    default: { /* ABS: iv_abs */
+        v4d inner = v4_pick((v4i)(av.hi <= splat(0.0)), -av.hi, splat(0.0));
+        o->v = (vi){v4_pick((v4i)(av.lo >= splat(0.0)), av.lo, inner),
+                    vmax(vabs(av.lo), vabs(av.hi))};
+        side_a = (v4i)(av.lo > splat(0.0));
+        side_b = (v4i)(av.hi < splat(0.0));
+        break;
+    }
+    }
+    side_b &= ~side_a; /* decided_branch asks A first */
+    v4i free = ~(side_a | side_b);
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
+        if (!(w >> k & 1)) {
+            o->d[k] = ivz();
+            continue;
+        }
+        vi da = a->d[k], db = b->d[k];
+        vi taken = in->op != ISM_OP_ABS ? vpick(side_a, da, db)
+                                        : vpick(side_a | iz(da), da, v_neg(da));
+        vi loose = vpick(iz(da) & iz(db), ivz(), ivwhole());
+        o->d[k] = vpick(free, loose, taken);
+    }
+    return free;
+}
+
+/* The op of a min, max or abs (its lanes' kinks are listed). */
+static inline bool is_branch(int op)
+{
+    return op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR ||
+           op == ISM_OP_MAX_RC || op == ISM_OP_ABS;
+}
+
+/* One instruction of the gradient pass (jet_op with second = 0), on registers r, in jet_op's
+ * order of reads and writes (an output register may be an operand's). Returns the lanes
+ * where it is a free kink (only min, max and abs have any). */
+INLINE v4i step(const ism_instr *in, vj *r, unsigned w)
+{
+    v4i free = {0, 0, 0, 0};
     vj *o = &r[in->out];
     const vj *a = &r[in->a];
     double c = in->imm;
@@ -152,7 +224,11 @@ INLINE void step(const ism_instr *in, vj *r, unsigned w)
     case ISM_OP_COPY:
         each(o, a, LIN_COPY, c, w);
         break;
-    default: /* ism_ivjet_tape_hess_from_kept lets no other operation in */
+    case ISM_OP_MIN_RR: case ISM_OP_MIN_RC: case ISM_OP_MAX_RR: case ISM_OP_MAX_RC:
+    case ISM_OP_ABS:
+        free = branch(o, in, r, w);
+        break;
+    default: /* lanes_take lets no other operation in */
         __builtin_trap();
     }
     /* sanitize(): NaN bounds to the infinity on their side (a partial outside w is 0), all
@@ -165,30 +241,50 @@ INLINE void step(const ism_instr *in, vj *r, unsigned w)
         _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
             o->d[k] = (vi){vnan_to(o->d[k].lo, -INFINITY), vnan_to(o->d[k].hi, INFINITY)};
     }
+    return free;
 }
 
-/* The tape over one group's registers r (the variables loaded), each instruction's
- * register recorded in keep (ISM_IVG_REG doubles an instruction, this group's part). */
-INLINE void run_group(const ism_tape *t, vj *r, vj *keep)
+/* The tape over one group's registers r (the variables loaded): each instruction's register
+ * recorded in keep (ISM_IVG_REG doubles an instruction, this group's part) when keep is not
+ * NULL; its free kinks' lanes (those in `lanes`: not padding) or'ed into kinks[i] at bit
+ * `first` + lane and counted in nk[lane]. */
+INLINE void run_group(const ism_tape *t, vj *r, vj *keep, uint8_t *kinks, uint32_t *nk,
+                      unsigned lanes, unsigned first)
 {
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];
         unsigned w = in->free_of == 0 ? 7u : ISM_FREE_ALL & ~(unsigned)in->free_of;
-        step(in, r, w);
-        keep[i * ISM_IVG_GROUPS] = r[in->out];
+        v4i free = step(in, r, w);
+        if (keep)
+            keep[i * ISM_IVG_GROUPS] = r[in->out];
+        if (!is_branch(in->op))
+            continue;
+        unsigned m = 0;
+        _Pragma("GCC unroll 4") for (int j = 0; j < VL; j++)
+            m |= free[j] ? 1u << j : 0u;
+        m &= lanes;
+        kinks[i] |= (uint8_t)(m << first);
+        for (; m; m &= m - 1)
+            nk[__builtin_ctz(m)]++;
     }
 }
 
 #if ISM_HAVE_AVX2_CLONE
-ISM_AVX2_CLONE static void run_avx2(const ism_tape *t, vj *r, vj *keep)
+ISM_AVX2_CLONE static void run_avx2(const ism_tape *t, vj *r, vj *keep, uint8_t *kinks,
+                                    uint32_t *nk, unsigned lanes, unsigned first)
 {
-    run_group(t, r, keep);
+    run_group(t, r, keep, kinks, nk, lanes, first);
 }
 #endif
 
-static void run_base(const ism_tape *t, vj *r, vj *keep) { run_group(t, r, keep); }
+static void run_base(const ism_tape *t, vj *r, vj *keep, uint8_t *kinks, uint32_t *nk,
+                     unsigned lanes, unsigned first)
+{
+    run_group(t, r, keep, kinks, nk, lanes, first);
+}
 
-/* The pass's registers and records for t, made or grown; false when out of memory. */
+/* The pass's registers, records and kink bytes for t, made or grown; false when out of
+ * memory. */
 static bool reserve(ism_ivjet_ws *ws, const ism_tape *t)
 {
     if (!ws->lane_regs) {
@@ -198,27 +294,42 @@ static bool reserve(ism_ivjet_ws *ws, const ism_tape *t)
     }
     if (ws->lane_cap < t->len) {
         free(ws->lane_kept);
+        free(ws->lane_kinks);
         ws->lane_cap = 0;
         ws->lane_kept = ism_line_alloc(t->len * ISM_IVG_REG * sizeof(double));
-        if (!ws->lane_kept)
+        ws->lane_kinks = malloc(t->len);
+        if (!ws->lane_kept || !ws->lane_kinks)
             return false;
         ws->lane_cap = t->len;
     }
     return true;
 }
 
-bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
-                                  const ism_interval (*box)[3], size_t n, ism_ivgrad *out)
+/* Every instruction of t is one the lanes take: those hess_only takes, and min, max, abs. */
+static bool lanes_take(const ism_tape *t, bool *branches)
 {
-    if (!ws || !t || !n || n > ISM_IVGRAD_BATCH || ws->nregs < t->nregs ||
-        !ism_ivjet_tape_hess_from_kept(t))
-        return false;
-    ws->lane_ok = 0; /* before reserve, which may free the records and fail to grow them */
-    if (!reserve(ws, t))
-        return false;
+    *branches = false;
+    for (size_t i = 0; i < t->len; i++) {
+        int op = t->code[i].op;
+        if (is_branch(op))
+            *branches = true;
+        else if (!ism_ivjet_hess_from_kept(op))
+            return false;
+    }
+    return true;
+}
+
+/* The pass over box[0..n) into out, the kinks' lanes into ws->lane_kinks and their counts
+ * into ws->lane_nk; records kept when keep. */
+static void run_lanes(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval (*box)[3],
+                      size_t n, ism_ivgrad *out, bool keep)
+{
+    memset(ws->lane_kinks, 0, t->len);
+    memset(ws->lane_nk, 0, sizeof ws->lane_nk);
     size_t ng = (n + VL - 1) / VL;
     for (size_t g = 0; g < ng; g++) {
-        vj *r = (vj *)ws->lane_regs + g * ws->nregs, *keep = (vj *)ws->lane_kept + g;
+        vj *r = (vj *)ws->lane_regs + g * ws->nregs;
+        vj *rec = keep ? (vj *)ws->lane_kept + g : NULL;
         /* load_box: a bound not a number, or lo > hi, gives the whole line */
         size_t b[VL];
         for (size_t j = 0; j < VL; j++)
@@ -231,12 +342,14 @@ bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
             for (int m = 0; m < 3; m++)
                 r[k].d[m] = m == k ? (vi){splat(1.0), splat(1.0)} : ivz();
         }
+        unsigned lanes = n - g * VL >= VL ? (1u << VL) - 1 : (1u << (n - g * VL)) - 1;
+        unsigned first = (unsigned)(g * VL);
 #if ISM_HAVE_AVX2_CLONE
         if (ISM_RUN_AVX2())
-            run_avx2(t, r, keep);
+            run_avx2(t, r, rec, ws->lane_kinks, ws->lane_nk + first, lanes, first);
         else
 #endif
-            run_base(t, r, keep);
+            run_base(t, r, rec, ws->lane_kinks, ws->lane_nk + first, lanes, first);
     }
     for (size_t b = 0; b < n; b++) {
         const double *res = (const double *)((const vj *)ws->lane_regs +
@@ -248,6 +361,40 @@ bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
         memcpy(ws->lane_box[b], box[b], sizeof ws->lane_box[b]);
     }
     ws->lane_t = t;
+    ws->lane_n = (uint32_t)n;
+    ws->lane_pass_t = t;
+}
+
+/* The checks both entry points make; ws's lane state reset (no records, no pass). */
+static bool can_run(const ism_tape *t, ism_ivjet_ws *ws, size_t n)
+{
+    if (!ws || !t || !n || n > ISM_IVGRAD_BATCH || ws->nregs < t->nregs)
+        return false;
+    ws->lane_ok = 0; /* before reserve, which may free the records and fail to grow them */
+    ws->lane_pass_t = NULL;
+    return true;
+}
+
+bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
+                                  const ism_interval (*box)[3], size_t n, ism_ivgrad *out)
+{
+    if (!t || !ism_ivjet_tape_hess_from_kept(t) || !can_run(t, ws, n) || !reserve(ws, t))
+        return false;
+    run_lanes(t, ws, box, n, out, true);
     ws->lane_ok = (1u << n) - 1;
+    return true;
+}
+
+bool ism_eval_interval_grad_lanes(const ism_tape *t, ism_ivjet_ws *ws,
+                                  const ism_interval (*box)[3], size_t n, ism_ivgrad *out,
+                                  uint32_t *nk)
+{
+    bool branches;
+    if (!t || !lanes_take(t, &branches) || !can_run(t, ws, n) || !reserve(ws, t))
+        return false;
+    run_lanes(t, ws, box, n, out, !branches);
+    ws->lane_ok = branches ? 0 : (1u << n) - 1;
+    if (nk)
+        memcpy(nk, ws->lane_nk, n * sizeof *nk);
     return true;
 }

@@ -37,6 +37,9 @@ ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
     ws->lane_cap = 0;
     ws->lane_t = NULL;
     ws->lane_ok = 0;
+    ws->lane_pass_t = NULL;
+    ws->lane_n = 0;
+    ws->lane_kinks = NULL;
     if (!ws->r || !ws->kept) {
         free(ws->r);
         free(ws->kept);
@@ -54,6 +57,7 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws)
     free(ws->kept);
     free(ws->lane_regs);
     free(ws->lane_kept);
+    free(ws->lane_kinks);
     free(ws);
 }
 
@@ -956,13 +960,50 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
  * registers, when t ends there and nothing overwrote them. No bound read can be NaN: the pass
  * sanitized every register it wrote, and kept the partials outside an instruction's want at
  * 0, so no test for one here. */
+/* The lane of the last batched pass of t on ws whose box is box, or -1. */
+static int pass_lane(const ism_ivjet_ws *ws, const ism_tape *t, const ism_interval box[3])
+{
+    if (!ws || !t || ws->lane_pass_t != t)
+        return -1;
+    for (uint32_t k = 0; k < ws->lane_n; k++)
+        if (same_box(box, ws->lane_box[k]))
+            return (int)k;
+    return -1;
+}
+
+size_t ism_ivjet_lane_kinks(const ism_tape *t, const ism_ivjet_ws *ws,
+                            const ism_interval box[3], uint8_t *kinks)
+{
+    int k = pass_lane(ws, t, box);
+    if (k < 0)
+        return (size_t)-1;
+    for (size_t i = 0; i < t->len; i++)
+        kinks[i] = (uint8_t)(ws->lane_kinks[i] >> k & 1u);
+    return ws->lane_nk[k];
+}
+
+/* Register reg of lane k of the last batched pass (eval_interval_grad_batch.c's layout: a
+ * group's registers in a row, each the value's and the three partials' lower and upper
+ * bounds as ISM_IVG_VL lanes apiece) as a value and first partials. */
+static ism_ivjet lane_reg(const ism_ivjet_ws *ws, int k, uint32_t reg)
+{
+    size_t g = (size_t)k / ISM_IVG_VL, j = (size_t)k % ISM_IVG_VL;
+    const double *p = ws->lane_regs + (g * ws->nregs + reg) * (8 * ISM_IVG_VL) + j;
+    ism_ivjet r = { .v = iv(p[0], p[ISM_IVG_VL]) };
+    _Pragma("GCC unroll 3") for (int c = 0; c < 3; c++)
+        r.d[c] = iv(p[(2 + 2 * c) * ISM_IVG_VL], p[(3 + 2 * c) * ISM_IVG_VL]);
+    return r;
+}
+
 bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, const ism_interval box[3],
                           ism_ivgrad piece[2])
 {
     if (!ws || !t || t->len == 0 || ws->nregs < t->nregs)
         return false;
-    /* the registers are the unforced gradient pass of t over this box */
-    if (ws->last_t != t || !same_box(box, ws->last_box))
+    /* the registers: the unforced gradient pass of t over this box, or a batched pass's lane */
+    bool scalar = ws->last_t == t && same_box(box, ws->last_box);
+    int lane = scalar ? -1 : pass_lane(ws, t, box);
+    if (!scalar && lane < 0)
         return false;
     const ism_instr *in = &t->code[t->len - 1];
     bool rr = in->op == ISM_OP_MIN_RR || in->op == ISM_OP_MAX_RR;
@@ -972,12 +1013,25 @@ bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, const ism_i
     if (in->free_of != 0 || in->out != t->result || in->out == in->a ||
         (rr && in->out == in->b))
         return false;
-    ism_ivjet cst;
-    const ism_ivjet *src[2] = { &ws->r[in->a], branch_b(in, ws->r, &cst) };
+    ism_ivjet cst, la, lb, lo;
+    const ism_ivjet *src[2], *out;
+    if (scalar) {
+        src[0] = &ws->r[in->a];
+        src[1] = branch_b(in, ws->r, &cst);
+        out = &ws->r[in->out];
+    } else { /* the lane's registers copied out; the constant as branch_b makes it */
+        la = lane_reg(ws, lane, in->a);
+        lo = lane_reg(ws, lane, in->out);
+        if (rr)
+            lb = lane_reg(ws, lane, in->b);
+        src[0] = &la;
+        src[1] = rr ? &lb : branch_b(in, NULL, &cst);
+        out = &lo;
+    }
     if (decided_branch(in, src[0]->v, src[1]->v) != ISM_BRANCH_FREE)
         return false;
     for (int p = 0; p < 2; p++) {
-        piece[p].v = ws->r[in->out].v;
+        piece[p].v = out->v;
         _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
             piece[p].d[k] = src[p]->d[k];
     }

@@ -47,14 +47,16 @@ size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_int
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out);
 
 /* Right after an ism_eval_interval_grad of t on ws over box with no branch forced (force
- * NULL), where t ends in a min or max of two registers (or of a register and a constant) that
- * depends on all of x, y and z, and whose two branches the box allows (a free kink): f and ∇f
- * over box with that last instruction forced onto branch A (piece[0]) and onto B (piece[1]),
- * bit for bit what ism_eval_interval_grad with that force gives, read from the registers the
- * pass left (no evaluation: a kink at the top is where a min or max of two solids creases,
- * Barth's sextic in its ball, the gyroid in its ball). False, piece untouched, when the last
- * pass on ws was not that one (another tape, another box, a force, a jet), t does not end
- * so, or its result shares a register with an operand. */
+ * NULL), or after a batched pass of t one of whose boxes is box (ism_eval_interval_grad_lanes
+ * or _batch, no batched pass since), where t ends in a min or max of two registers (or of a
+ * register and a constant) that depends on all of x, y and z, and whose two branches the box
+ * allows (a free kink): f and ∇f over box with that last instruction forced onto branch A
+ * (piece[0]) and onto B (piece[1]), bit for bit what ism_eval_interval_grad with that force
+ * gives, read from the registers the pass left (no evaluation: a kink at the top is where a
+ * min or max of two solids creases, Barth's sextic in its ball, the gyroid in its ball).
+ * False, piece untouched, when neither pass stands (another tape, another box, a force, a
+ * jet since the scalar one), t does not end so, or its result shares a register with an
+ * operand. */
 bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, const ism_interval box[3],
                           ism_ivgrad piece[2]);
 
@@ -82,6 +84,26 @@ size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
  * powers, or ws does not fit t or cannot grow: then take the boxes one by one. */
 bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
                                   const ism_interval (*box)[3], size_t n, ism_ivgrad *out);
+
+/* ism_eval_interval_grad_batch for tapes with min, max and abs as well: out[k] bit for bit
+ * what ism_eval_interval_grad(t, ws, box[k], NULL, kinks, &out[k]) gives, nk[k] (nk may be
+ * NULL) the number it returns (the box's free kinks), its kink bytes kept in ws for
+ * ism_ivjet_lane_kinks, and its registers for ism_ivjet_top_pieces over box[k]; records for
+ * the jets as ism_eval_interval_grad_batch keeps them when t holds none of min, max and abs
+ * (then the two are the same call). False, computing nothing, when t holds an operation
+ * besides the affine ones, +, −, ×, squares, integer powers, min, max and abs, or ws does not
+ * fit t or cannot grow: then take the boxes one by one. */
+bool ism_eval_interval_grad_lanes(const ism_tape *t, ism_ivjet_ws *ws,
+                                  const ism_interval (*box)[3], size_t n, ism_ivgrad *out,
+                                  uint32_t *nk);
+
+/* The kink bytes of the last batched pass of t on ws over box (ism_eval_interval_grad_lanes
+ * or _batch: no other batched pass since, box one of its boxes) into kinks (t's length of
+ * bytes): 1 at every free min/max/abs instruction, 0 elsewhere, as ism_eval_interval_grad's
+ * over that box; returns their number. (size_t)-1, kinks untouched, when there is no such
+ * pass. */
+size_t ism_ivjet_lane_kinks(const ism_tape *t, const ism_ivjet_ws *ws,
+                            const ism_interval box[3], uint8_t *kinks);
 
 /* The same with the Hessian. For a degenerate box [c, c] this encloses the exact jet at c. */
 size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],

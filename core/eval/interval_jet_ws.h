@@ -51,7 +51,16 @@ struct ism_ivjet_ws {
     const ism_tape *lane_t;
     ism_interval lane_box[ISM_IVGRAD_BATCH][3];
     uint32_t lane_ok;
+    /* The last batched pass (either entry point): lane_pass_t, NULL when none stands, over
+     * lane_box[0..lane_n); lane_regs hold its registers (ism_ivjet_top_pieces reads them),
+     * lane_kinks[i] (lane_cap bytes) bit k where instruction i is a free kink over box k,
+     * lane_nk[k] their count. */
+    const ism_tape *lane_pass_t;
+    uint32_t lane_n;
+    uint8_t *lane_kinks;
+    uint32_t lane_nk[ISM_IVGRAD_BATCH];
 };
+_Static_assert(ISM_IVGRAD_BATCH <= 8, "a lane's kink is one bit of lane_kinks' bytes");
 
 /* Operations whose Hessian hess_only computes from the operands' kept values and first
  * partials alone (eval_interval_jet.c), and the only ones the batched pass computes. */

@@ -311,6 +311,7 @@ static void centre_at(const search *s, worker *w, const ism_interval x[3], ism_d
 typedef struct pre_grad {
     bool ok;
     ism_ivgrad g, at;
+    uint32_t nk; /* the box's free kinks (their bytes: ism_ivjet_lane_kinks) */
 } pre_grad;
 
 /* Krawczyk's test on the cell x from its model m (∇f at the centre, the Hessian over x).
@@ -587,8 +588,10 @@ static int classify(const search *s, worker *w, const ism_interval x[3], const i
      * partials instead, and smooth_tests' jet over the same box then computes only the
      * Hessian from them (interval_jet.h: the same bits). heart 4,037 jets, cross-cap 2,093. */
     size_t nk = 0;
-    if (pre && pre->ok) {
+    if (pre && pre->ok &&
+        (!pre->nk || ism_ivjet_lane_kinks(s->t, w->jw, x, w->kinks) == pre->nk)) {
         g = pre->g;
+        nk = pre->nk;
         w->grads_batch_read++;
     } else
         nk = s->branches ? ism_eval_interval_grad(s->t, w->jw, x, NULL, w->kinks, &g)
@@ -887,12 +890,12 @@ static void finish(search *s, worker *w, task_out *out, scell *c, const ism_inte
  * by screen and not dropped by the centre test; fc[m]: f at child m's centre, or NULL), at
  * most ISM_IVGRAD_BATCH / 2 of them, in order: their gradients over their boxes and at their
  * centres (smooth_tests' centre_at, taken for every such child: the box's may exclude 0,
- * and then the centre's is not used) in one ism_eval_interval_grad_batch, bit for bit the
+ * and then the centre's is not used) in one ism_eval_interval_grad_lanes, bit for bit the
  * one-by-one passes (classify's kept pass; centre_at's), into pre[m]; the jets smooth_tests
  * then takes over the boxes take the batch's records as they took the kept pass's. On the
  * torus 2 such children a parent on average, 4 lanes: cheaper than one by one from 2 lanes
- * up (interval_jet.h, ISM_IVGRAD_BATCH's figures). Not for tapes with min, max or abs
- * (the batch does not take them; classify lists their kinks). */
+ * up (interval_jet.h, ISM_IVGRAD_BATCH's figures). With min, max or abs the lanes list
+ * each box's kinks as classify's pass would (ism_eval_interval_grad_lanes). */
 static void pre_gradients(const search *s, worker *w, const int v[8], const ism_interval *bx,
                           const ism_interval *by, const ism_interval *bz,
                           const ism_interval *const fc[8], ism_interval q, pre_grad pre[8])
@@ -903,7 +906,7 @@ static void pre_gradients(const search *s, worker *w, const int v[8], const ism_
     size_t n = 0;
     for (int m = 0; m < 8; m++)
         pre[m].ok = false;
-    if (s->branches || !s->batch)
+    if (!s->batch)
         return;
     for (int m = 0; m < 8 && n < ISM_IVGRAD_BATCH / 2; m++)
         if (v[m] == OPEN && !centre_drops(fc[m], q))
@@ -918,10 +921,12 @@ static void pre_gradients(const search *s, worker *w, const int v[8], const ism_
             box[n + k][a] = iv(c[a], c[a]);
         }
     }
-    if (!n || !ism_eval_interval_grad_batch(s->t, w->jw, (const ism_interval (*)[3])box, 2 * n, g))
+    uint32_t nk[ISM_IVGRAD_BATCH];
+    if (!n || !ism_eval_interval_grad_lanes(s->t, w->jw, (const ism_interval (*)[3])box, 2 * n,
+                                            g, nk))
         return;
     for (size_t k = 0; k < n; k++)
-        pre[kid[k]] = (pre_grad){ true, g[k], g[n + k] };
+        pre[kid[k]] = (pre_grad){ true, g[k], g[n + k], nk[k] };
     w->grads_batched += n;
 }
 
