@@ -248,9 +248,10 @@ INLINE v4i step(const ism_instr *in, vj *r, unsigned w)
  * recorded in keep (ISM_IVG_REG doubles an instruction, this group's part) when keep is not
  * NULL; its free kinks' lanes (those in `lanes`: not padding) or'ed into kinks[i] at bit
  * `first` + lane and counted in nk[lane]. */
-INLINE void run_group(const ism_tape *t, vj *r, vj *keep, uint8_t *kinks, uint32_t *nk,
+INLINE void run_group(const ism_tape *t, vj *r, vj *keep, ism_ivjet_ws *ws, uint32_t *nk,
                       unsigned lanes, unsigned first)
 {
+    uint8_t *kinks = ws->lane_kinks;
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];
         unsigned w = in->free_of == 0 ? 7u : ISM_FREE_ALL & ~(unsigned)in->free_of;
@@ -263,6 +264,8 @@ INLINE void run_group(const ism_tape *t, vj *r, vj *keep, uint8_t *kinks, uint32
         _Pragma("GCC unroll 4") for (int j = 0; j < VL; j++)
             m |= free[j] ? 1u << j : 0u;
         m &= lanes;
+        if (m && !kinks[i]) /* the first lane with a kink here: listed once */
+            ws->lane_kink_at[ws->lane_nkink_at++] = (uint32_t)i;
         kinks[i] |= (uint8_t)(m << first);
         for (; m; m &= m - 1)
             nk[__builtin_ctz(m)]++;
@@ -270,17 +273,17 @@ INLINE void run_group(const ism_tape *t, vj *r, vj *keep, uint8_t *kinks, uint32
 }
 
 #if ISM_HAVE_AVX2_CLONE
-ISM_AVX2_CLONE static void run_avx2(const ism_tape *t, vj *r, vj *keep, uint8_t *kinks,
+ISM_AVX2_CLONE static void run_avx2(const ism_tape *t, vj *r, vj *keep, ism_ivjet_ws *ws,
                                     uint32_t *nk, unsigned lanes, unsigned first)
 {
-    run_group(t, r, keep, kinks, nk, lanes, first);
+    run_group(t, r, keep, ws, nk, lanes, first);
 }
 #endif
 
-static void run_base(const ism_tape *t, vj *r, vj *keep, uint8_t *kinks, uint32_t *nk,
+static void run_base(const ism_tape *t, vj *r, vj *keep, ism_ivjet_ws *ws, uint32_t *nk,
                      unsigned lanes, unsigned first)
 {
-    run_group(t, r, keep, kinks, nk, lanes, first);
+    run_group(t, r, keep, ws, nk, lanes, first);
 }
 
 /* The pass's registers, records and kink bytes for t, made or grown; false when out of
@@ -295,10 +298,12 @@ static bool reserve(ism_ivjet_ws *ws, const ism_tape *t)
     if (ws->lane_cap < t->len) {
         free(ws->lane_kept);
         free(ws->lane_kinks);
+        free(ws->lane_kink_at);
         ws->lane_cap = 0;
         ws->lane_kept = ism_line_alloc(t->len * ISM_IVG_REG * sizeof(double));
         ws->lane_kinks = malloc(t->len);
-        if (!ws->lane_kept || !ws->lane_kinks)
+        ws->lane_kink_at = malloc(t->len * sizeof *ws->lane_kink_at);
+        if (!ws->lane_kept || !ws->lane_kinks || !ws->lane_kink_at)
             return false;
         ws->lane_cap = t->len;
     }
@@ -326,6 +331,7 @@ static void run_lanes(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval (*
 {
     memset(ws->lane_kinks, 0, t->len);
     memset(ws->lane_nk, 0, sizeof ws->lane_nk);
+    ws->lane_nkink_at = 0;
     size_t ng = (n + VL - 1) / VL;
     for (size_t g = 0; g < ng; g++) {
         vj *r = (vj *)ws->lane_regs + g * ws->nregs;
@@ -346,10 +352,10 @@ static void run_lanes(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval (*
         unsigned first = (unsigned)(g * VL);
 #if ISM_HAVE_AVX2_CLONE
         if (ISM_RUN_AVX2())
-            run_avx2(t, r, rec, ws->lane_kinks, ws->lane_nk + first, lanes, first);
+            run_avx2(t, r, rec, ws, ws->lane_nk + first, lanes, first);
         else
 #endif
-            run_base(t, r, rec, ws->lane_kinks, ws->lane_nk + first, lanes, first);
+            run_base(t, r, rec, ws, ws->lane_nk + first, lanes, first);
     }
     for (size_t b = 0; b < n; b++) {
         const double *res = (const double *)((const vj *)ws->lane_regs +

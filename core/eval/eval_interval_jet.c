@@ -40,6 +40,8 @@ ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
     ws->lane_pass_t = NULL;
     ws->lane_n = 0;
     ws->lane_kinks = NULL;
+    ws->lane_kink_at = NULL;
+    ws->lane_nkink_at = 0;
     if (!ws->r || !ws->kept) {
         free(ws->r);
         free(ws->kept);
@@ -58,6 +60,7 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws)
     free(ws->lane_regs);
     free(ws->lane_kept);
     free(ws->lane_kinks);
+    free(ws->lane_kink_at);
     free(ws);
 }
 
@@ -977,8 +980,11 @@ size_t ism_ivjet_lane_kinks(const ism_tape *t, const ism_ivjet_ws *ws,
     int k = pass_lane(ws, t, box);
     if (k < 0)
         return (size_t)-1;
-    for (size_t i = 0; i < t->len; i++)
+    memset(kinks, 0, t->len);
+    for (size_t j = 0; j < ws->lane_nkink_at; j++) {
+        uint32_t i = ws->lane_kink_at[j];
         kinks[i] = (uint8_t)(ws->lane_kinks[i] >> k & 1u);
+    }
     return ws->lane_nk[k];
 }
 

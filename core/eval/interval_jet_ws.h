@@ -54,11 +54,14 @@ struct ism_ivjet_ws {
     /* The last batched pass (either entry point): lane_pass_t, NULL when none stands, over
      * lane_box[0..lane_n); lane_regs hold its registers (ism_ivjet_top_pieces reads them),
      * lane_kinks[i] (lane_cap bytes) bit k where instruction i is a free kink over box k,
-     * lane_nk[k] their count. */
+     * lane_nk[k] their count, lane_kink_at[0..lane_nkink_at) the i whose byte is not 0 (a
+     * box's kink bytes are written from these alone: Barth's tape has one min/max). */
     const ism_tape *lane_pass_t;
     uint32_t lane_n;
     uint8_t *lane_kinks;
     uint32_t lane_nk[ISM_IVGRAD_BATCH];
+    uint32_t *lane_kink_at;
+    size_t lane_nkink_at;
 };
 _Static_assert(ISM_IVGRAD_BATCH <= 8, "a lane's kink is one bit of lane_kinks' bytes");
 

@@ -7,8 +7,8 @@
  * (grads_batch_read: a child batched that the centre test then drops wastes its lanes). A
  * batch record given to the wrong child or the box's gradient read for the centre's (g[k] /
  * g[n + k]) would move a box or a count here. The cross-cap (pinch points and a
- * double segment: cells kept to the finest level along it) and Kummer's 16 nodes, in three
- * placements (pf_sweep_box). */
+ * double segment: cells kept to the finest level along it), Kummer's 16 nodes and Barth's
+ * sextic in its ball (kinks listed in the lanes), in three placements (pf_sweep_box). */
 #include <criterion/criterion.h>
 #include <string.h>
 #include "poly_fixture.h"
@@ -78,5 +78,16 @@ Test(search_batch, kummer_16_nodes_batched_as_one_by_one)
     const test_surface *s = test_surface_named("kummer-16-nodes");
     ism_tape *t = test_surface_compile(s);
     expect_same(t, s->name, s->box, 7 - pf_quick());
+    ism_tape_free(t);
+}
+
+/* Barth's sextic in its ball: a max at the top, so classify lists kinks — the lanes take
+ * them (ism_eval_interval_grad_lanes), the children of parents without a model in batches of
+ * their boxes alone, and a kink at the top is read from the batch's lanes. */
+Test(search_batch, barth_with_kinks_batched_as_one_by_one)
+{
+    ism_tape *t = pf_compile(&pf_barth_sextic);
+    const double box[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6};
+    expect_same(t, "barth-sextic", box, 6 - pf_quick());
     ism_tape_free(t);
 }
