@@ -169,7 +169,7 @@ static inline bool is_branch(int op)
 /* One instruction of the gradient pass (jet_op with second = 0), on registers r, in jet_op's
  * order of reads and writes (an output register may be an operand's). Returns the lanes
  * where it is a free kink (only min, max and abs have any). */
-INLINE v4i step(const ism_instr *in, vj *r, unsigned w)
+INLINE v4i step(const ism_instr *in, vj *r, unsigned w, bool branches)
 {
     v4i free = {0, 0, 0, 0};
     vj *o = &r[in->out];
@@ -226,8 +226,11 @@ INLINE v4i step(const ism_instr *in, vj *r, unsigned w)
         break;
     case ISM_OP_MIN_RR: case ISM_OP_MIN_RC: case ISM_OP_MAX_RR: case ISM_OP_MAX_RC:
     case ISM_OP_ABS:
-        free = branch(o, in, r, w);
-        break;
+        if (branches) { /* else (the copy for tapes without them) as default */
+            free = branch(o, in, r, w);
+            break;
+        }
+        __builtin_trap();
     default: /* lanes_take lets no other operation in */
         __builtin_trap();
     }
@@ -244,21 +247,21 @@ INLINE v4i step(const ism_instr *in, vj *r, unsigned w)
     return free;
 }
 
-/* The tape over one group's registers r (the variables loaded): each instruction's register
- * recorded in keep (ISM_IVG_REG doubles an instruction, this group's part) when keep is not
- * NULL; its free kinks' lanes (those in `lanes`: not padding) or'ed into kinks[i] at bit
- * `first` + lane and counted in nk[lane]. */
+/* The tape over one group's registers r (the variables loaded): without branches each
+ * instruction's register recorded in keep (ISM_IVG_REG doubles an instruction, this
+ * group's part); with them its free kinks' lanes (those in `lanes`: not padding) or'ed into
+ * ws->lane_kinks[i] at bit `first` + lane and counted in nk[lane]. */
 INLINE void run_group(const ism_tape *t, vj *r, vj *keep, ism_ivjet_ws *ws, uint32_t *nk,
-                      unsigned lanes, unsigned first)
+                      unsigned lanes, unsigned first, bool branches)
 {
     uint8_t *kinks = ws->lane_kinks;
     for (size_t i = 0; i < t->len; i++) {
         const ism_instr *in = &t->code[i];
         unsigned w = in->free_of == 0 ? 7u : ISM_FREE_ALL & ~(unsigned)in->free_of;
-        v4i free = step(in, r, w);
-        if (keep)
+        v4i free = step(in, r, w, branches);
+        if (!branches) /* a constant in each copy: records only without kinks */
             keep[i * ISM_IVG_GROUPS] = r[in->out];
-        if (!is_branch(in->op))
+        if (!branches || !is_branch(in->op))
             continue;
         unsigned m = 0;
         _Pragma("GCC unroll 4") for (int j = 0; j < VL; j++)
@@ -274,21 +277,28 @@ INLINE void run_group(const ism_tape *t, vj *r, vj *keep, ism_ivjet_ws *ws, uint
 
 #if ISM_HAVE_AVX2_CLONE
 ISM_AVX2_CLONE static void run_avx2(const ism_tape *t, vj *r, vj *keep, ism_ivjet_ws *ws,
-                                    uint32_t *nk, unsigned lanes, unsigned first)
+                                    uint32_t *nk, unsigned lanes, unsigned first, bool branches)
 {
-    run_group(t, r, keep, ws, nk, lanes, first);
+    if (branches) /* two copies: a tape without kinks pays no kink test an instruction */
+        run_group(t, r, keep, ws, nk, lanes, first, true);
+    else
+        run_group(t, r, keep, ws, nk, lanes, first, false);
 }
 #endif
 
 static void run_base(const ism_tape *t, vj *r, vj *keep, ism_ivjet_ws *ws, uint32_t *nk,
-                     unsigned lanes, unsigned first)
+                     unsigned lanes, unsigned first, bool branches)
 {
-    run_group(t, r, keep, ws, nk, lanes, first);
+    if (branches)
+        run_group(t, r, keep, ws, nk, lanes, first, true);
+    else
+        run_group(t, r, keep, ws, nk, lanes, first, false);
 }
 
 /* The pass's registers, records and kink bytes for t, made or grown; false when out of
  * memory. */
-static bool reserve(ism_ivjet_ws *ws, const ism_tape *t)
+static inline __attribute__((always_inline)) bool reserve(ism_ivjet_ws *ws,
+                                                            const ism_tape *t)
 {
     if (!ws->lane_regs) {
         ws->lane_regs = ism_line_alloc((size_t)ws->nregs * ISM_IVG_REG * sizeof(double));
@@ -314,6 +324,8 @@ static bool reserve(ism_ivjet_ws *ws, const ism_tape *t)
 static bool lanes_take(const ism_tape *t, bool *branches)
 {
     *branches = false;
+    if (ism_ivjet_tape_hess_from_kept(t)) /* the smooth tapes' one scan, as the batch's */
+        return true;
     for (size_t i = 0; i < t->len; i++) {
         int op = t->code[i].op;
         if (is_branch(op))
@@ -324,18 +336,22 @@ static bool lanes_take(const ism_tape *t, bool *branches)
     return true;
 }
 
-/* The pass over box[0..n) into out, the kinks' lanes into ws->lane_kinks and their counts
- * into ws->lane_nk; records kept when keep. */
-static void run_lanes(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval (*box)[3],
-                      size_t n, ism_ivgrad *out, bool keep)
+/* The pass over box[0..n) into out; with branches (t holds min, max or abs) the kinks' lanes
+ * into ws->lane_kinks and their counts into ws->lane_nk (without, lane_nk untouched), else
+ * the records kept. */
+static inline __attribute__((always_inline)) void
+run_lanes(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval (*box)[3], size_t n,
+          ism_ivgrad *out, bool branches)
 {
-    memset(ws->lane_kinks, 0, t->len);
-    memset(ws->lane_nk, 0, sizeof ws->lane_nk);
+    if (branches) {
+        memset(ws->lane_kinks, 0, t->len);
+        memset(ws->lane_nk, 0, sizeof ws->lane_nk);
+    }
     ws->lane_nkink_at = 0;
     size_t ng = (n + VL - 1) / VL;
     for (size_t g = 0; g < ng; g++) {
         vj *r = (vj *)ws->lane_regs + g * ws->nregs;
-        vj *rec = keep ? (vj *)ws->lane_kept + g : NULL;
+        vj *rec = (vj *)ws->lane_kept + g; /* written without branches only */
         /* load_box: a bound not a number, or lo > hi, gives the whole line */
         size_t b[VL];
         for (size_t j = 0; j < VL; j++)
@@ -352,10 +368,10 @@ static void run_lanes(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval (*
         unsigned first = (unsigned)(g * VL);
 #if ISM_HAVE_AVX2_CLONE
         if (ISM_RUN_AVX2())
-            run_avx2(t, r, rec, ws, ws->lane_nk + first, lanes, first);
+            run_avx2(t, r, rec, ws, ws->lane_nk + first, lanes, first, branches);
         else
 #endif
-            run_base(t, r, rec, ws, ws->lane_nk + first, lanes, first);
+            run_base(t, r, rec, ws, ws->lane_nk + first, lanes, first, branches);
     }
     for (size_t b = 0; b < n; b++) {
         const double *res = (const double *)((const vj *)ws->lane_regs +
@@ -372,7 +388,8 @@ static void run_lanes(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval (*
 }
 
 /* The checks both entry points make; ws's lane state reset (no records, no pass). */
-static bool can_run(const ism_tape *t, ism_ivjet_ws *ws, size_t n)
+static inline __attribute__((always_inline)) bool can_run(const ism_tape *t, ism_ivjet_ws *ws,
+                                                            size_t n)
 {
     if (!ws || !t || !n || n > ISM_IVGRAD_BATCH || ws->nregs < t->nregs)
         return false;
@@ -386,7 +403,7 @@ bool ism_eval_interval_grad_batch(const ism_tape *t, ism_ivjet_ws *ws,
 {
     if (!t || !ism_ivjet_tape_hess_from_kept(t) || !can_run(t, ws, n) || !reserve(ws, t))
         return false;
-    run_lanes(t, ws, box, n, out, true);
+    run_lanes(t, ws, box, n, out, false);
     ws->lane_ok = (1u << n) - 1;
     return true;
 }
@@ -398,8 +415,10 @@ bool ism_eval_interval_grad_lanes(const ism_tape *t, ism_ivjet_ws *ws,
     bool branches;
     if (!t || !lanes_take(t, &branches) || !can_run(t, ws, n) || !reserve(ws, t))
         return false;
-    run_lanes(t, ws, box, n, out, !branches);
+    run_lanes(t, ws, box, n, out, branches);
     ws->lane_ok = branches ? 0 : (1u << n) - 1;
+    if (!branches) /* no kink: run_lanes left lane_nk as it was */
+        memset(ws->lane_nk, 0, sizeof ws->lane_nk);
     if (nk)
         memcpy(nk, ws->lane_nk, n * sizeof *nk);
     return true;

@@ -985,7 +985,7 @@ size_t ism_ivjet_lane_kinks(const ism_tape *t, const ism_ivjet_ws *ws,
         uint32_t i = ws->lane_kink_at[j];
         kinks[i] = (uint8_t)(ws->lane_kinks[i] >> k & 1u);
     }
-    return ws->lane_nk[k];
+    return ws->lane_nkink_at ? ws->lane_nk[k] : 0; /* none listed: lane_nk not written */
 }
 
 /* Register reg of lane k of the last batched pass (eval_interval_grad_batch.c's layout: a

@@ -926,9 +926,11 @@ static void pre_gradients(const search *s, worker *w, const int v[8], const ism_
                 box[n + k][a] = iv(c[a], c[a]);
         }
     }
-    uint32_t nk[ISM_IVGRAD_BATCH];
-    if (!n || !ism_eval_interval_grad_lanes(s->t, w->jw, (const ism_interval (*)[3])box,
-                                            centres ? 2 * n : n, g, nk))
+    uint32_t nk[ISM_IVGRAD_BATCH] = { 0 };
+    size_t nb = centres ? 2 * n : n;
+    const ism_interval (*b)[3] = (const ism_interval (*)[3])box;
+    if (!n || !(s->branches ? ism_eval_interval_grad_lanes(s->t, w->jw, b, nb, g, nk)
+                            : ism_eval_interval_grad_batch(s->t, w->jw, b, nb, g)))
         return;
     for (size_t k = 0; k < n; k++)
         pre[kid[k]] = (pre_grad){ true, centres, g[k], centres ? g[n + k] : g[k], nk[k] };
@@ -967,7 +969,8 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     w->evals_interval += 8;
     const ism_dual_model *pm = p->model == NO_MODEL ? NULL : &s->models[p->model];
     ism_dual_model km; /* a child's model, built by its tests */
-    if (!pm) { /* no centre test: the open children's gradients in one batch */
+    if (!pm) { /* no centre test; with kinks, the open children's gradients in one batch
+                  (without, one by one: the torus's search paid more so) */
         int v[8];
         const ism_interval *none[8] = { NULL };
         pre_grad pre[8];
@@ -975,7 +978,8 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
             ism_interval x[3] = { bx[m], by[m], bz[m] };
             v[m] = screen(w, &kids[m], x, f[m], NULL, 0);
         }
-        pre_gradients(s, w, v, bx, by, bz, none, iv(0.0, 0.0), false, pre);
+        pre_gradients(s, w, s->branches ? v : (const int[8]){ 0 }, bx, by, bz, none,
+                      iv(0.0, 0.0), false, pre);
         for (int m = 0; m < 8; m++) {
             ism_interval x[3] = { bx[m], by[m], bz[m] };
             finish(s, w, out, &kids[m], x, f[m], v[m], NULL, iv(0.0, 0.0), &km, &pre[m]);
