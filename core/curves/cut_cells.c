@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include "core/util/bits.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 
@@ -392,14 +393,13 @@ static bool cells_triangles(cut_state *s, size_t from, size_t end, uint32_t **ou
     for (size_t li = from; li < end; li++) {
         const cut_cell *cl = &c->cell[c->list[li]];
         for (size_t i = 0; i < cl->n; i++)
-            c->bits[cl->tri[i] >> 6] |= (uint64_t)1 << (cl->tri[i] & 63);
+            ism_bit_set(c->bits, cl->tri[i]);
         total += cl->n;
     }
     if (!ism_grow((void **)out, cap, total + 1, sizeof **out, CUT_FIRST))
         return false;
-    for (size_t w = 0; w < words; w++)
-        for (uint64_t b = c->bits[w]; b; b &= b - 1)
-            (*out)[(*n)++] = (uint32_t)(64 * w + (size_t)__builtin_ctzll(b));
+    ISM_BITS_EACH(c->bits, words, t)
+        (*out)[(*n)++] = (uint32_t)t;
     return true;
 }
 

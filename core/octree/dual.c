@@ -26,6 +26,7 @@
 #include "core/octree/grid.h"
 #include "core/octree/sampler.h"
 #include "core/octree/straddle.h"
+#include "core/util/bits.h"
 #include "core/util/grow.h"
 #include "core/util/parallel.h"
 
@@ -49,30 +50,18 @@
 #define DUAL_POINT_MIN_BITS 11
 #define DUAL_POINT_ENTRIES_PER_NODE 4
 
-/* The point memo's entries are not cleared: a bit a slot (worker.filled) says which hold a
- * point, and only those bits are (2^bits / 8 bytes). calloc clearing the 80 KB of the
- * first table was 82K of the sphere's 2.13M instructions at E 0.0141 (bench_error under
- * callgrind: memset counts a byte an instruction); the bit costs a test a look-up. */
-static inline bool point_filled(const worker *w, size_t i)
-{
-    return w->filled[i >> 6] >> (i & 63) & 1;
-}
-
-/* Room for a memo of 2^bits entries (uncleared) and its bits (cleared) into *points and
- * *filled; false (nothing held) when out of memory. */
+/* The point memo's entries are not cleared: a bit a slot (worker.filled, util/bits.h) says
+ * which hold a point, and only those bits are (2^bits / 8 bytes). calloc clearing the 80 KB
+ * of the first table was 82K of the sphere's 2.13M instructions at E 0.0141 (bench_error
+ * under callgrind: memset counts a byte an instruction); the bit costs a test a look-up.
+ * Room for a memo of 2^bits entries into *points and its bits into *filled; false (nothing
+ * held) when out of memory. */
 static bool points_alloc(int bits, ism_point_entry **points, uint64_t **filled)
 {
-    size_t n = (size_t)1 << bits; /* bits >= DUAL_POINT_MIN_BITS: whole words of bits */
-    *points = malloc(n * sizeof **points);
-    *filled = calloc(n / 64, sizeof **filled);
-    if (*points && *filled)
-        return true;
-    free(*points);
-    free(*filled);
-    *points = NULL;
-    *filled = NULL;
-    return false;
+    *points = ism_bits_table((size_t)1 << bits, sizeof **points, filled);
+    return *points != NULL;
 }
+
 /* children_free's batches are made while the children they showed free (each spared the
  * interval of f and ∇f, 2-3x a batch's cost) are at least this many per batch so far (the
  * first split pass past min_depth always batches). With every batch made: kummer-16-nodes
@@ -131,12 +120,12 @@ static void sample_points(dual *d, worker *w, const int32_t (*q)[3], size_t n, d
         __builtin_prefetch(slot[j], 1);
     }
     for (size_t j = 0; j < n; j++) {
-        if (point_filled(w, at[j]) && slot[j]->key == key[j]) {
+        if (ism_bit_test(w->filled, at[j]) && slot[j]->key == key[j]) {
             f[j] = slot[j]->f;
             memcpy(g[j], slot[j]->g, sizeof g[j]);
             continue;
         }
-        w->filled[at[j] >> 6] |= (uint64_t)1 << (at[j] & 63);
+        ism_bit_set(w->filled, at[j]);
         slot[j]->key = key[j];
         miss[nm++] = j;
     }
@@ -697,13 +686,11 @@ static bool points_for(dual *d, size_t nodes)
             return false;
         }
         uint64_t mask = ((uint64_t)1 << bits) - 1;
-        for (size_t wd = 0; wd < ((size_t)1 << w->bits) / 64; wd++) /* a word of bits at once */
-            for (uint64_t b = w->filled[wd]; b; b &= b - 1) {
-                size_t i = 64 * wd + (size_t)__builtin_ctzll(b);
-                size_t j = ism_cache_mix(w->points[i].key) & mask;
-                grown[j] = w->points[i];
-                filled[j >> 6] |= (uint64_t)1 << (j & 63);
-            }
+        ISM_BITS_EACH(w->filled, ism_bits_words((size_t)1 << w->bits), i) {
+            size_t j = ism_cache_mix(w->points[i].key) & mask;
+            grown[j] = w->points[i];
+            ism_bit_set(filled, j);
+        }
         free(w->points);
         free(w->filled);
         w->points = grown;
@@ -1382,7 +1369,8 @@ static enum ism_dual_status run_in_grown_box(dual *d, ism_mesh *mesh, ism_dual_s
     d->inner = given->box;
     set_grid(d, grown.box, grown.max_depth);
     for (int k = 0; k < d->nw; k++) {
-        memset(d->w[k].filled, 0, ((size_t)1 << d->w[k].bits) / 64 * sizeof *d->w[k].filled);
+        memset(d->w[k].filled, 0,
+               ism_bits_words((size_t)1 << d->w[k].bits) * sizeof *d->w[k].filled);
         free(d->w[k].pairs);
         free(d->w[k].pairs_filled);
         d->w[k].pairs = NULL;

@@ -12,6 +12,7 @@
 #include "core/octree/graph_cert.h"
 #include "core/octree/grid.h"
 #include "core/octree/sampler.h"
+#include "core/util/bits.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -138,21 +139,15 @@ static int edge_root_pair(dual *d, worker *w, const dnode *n, const corner_view 
         /* NULL: every search made. The entries are not cleared, only their bits (512
          * bytes for 128 KB: calloc clearing it cost the torus at E 0.0141 99K of 17.1M
          * instructions, bench_error under callgrind) */
-        w->pairs = malloc(((size_t)1 << ISM_PAIR_MEMO_BITS) * sizeof *w->pairs);
-        w->pairs_filled = calloc(((size_t)1 << ISM_PAIR_MEMO_BITS) / 64, sizeof *w->pairs_filled);
-        if (!w->pairs || !w->pairs_filled) {
-            free(w->pairs);
-            free(w->pairs_filled);
-            w->pairs = NULL;
-            w->pairs_filled = NULL;
-        }
+        w->pairs = ism_bits_table((size_t)1 << ISM_PAIR_MEMO_BITS, sizeof *w->pairs,
+                                  &w->pairs_filled);
     }
     ism_pair_entry none = {0}, *m = w->pairs ? ism_pair_slot(w->pairs, k0, k1) : &none;
     size_t i = w->pairs ? (size_t)(m - w->pairs) : 0;
     if (w->pairs) {
-        if (w->pairs_filled[i >> 6] >> (i & 63) & 1 && m->a == k0 && m->b == k1)
+        if (ism_bit_test(w->pairs_filled, i) && m->a == k0 && m->b == k1)
             return m->found;
-        w->pairs_filled[i >> 6] |= (uint64_t)1 << (i & 63);
+        ism_bit_set(w->pairs_filled, i);
     }
     int found = 0;
     double t = 0;

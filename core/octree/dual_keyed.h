@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 #include <stdlib.h>
+#include "core/util/bits.h"
 
 /* An open-addressed map from 64-bit keys (never 0) to doubles, kept at most half full. Bit
  * i of used says slot i holds a key: only used is cleared when the table is made (cap / 8
@@ -24,13 +25,13 @@ typedef struct keyed {
 /* Does slot i hold a key? */
 static inline bool keyed_used(const keyed *k, size_t i)
 {
-    return k->used[i >> 6] >> (i & 63) & 1;
+    return ism_bit_test(k->used, i);
 }
 
 /* Slot i (empty) takes key; the caller sets its value and counts it in n. */
 static inline void keyed_claim(keyed *k, size_t i, uint64_t key)
 {
-    k->used[i >> 6] |= (uint64_t)1 << (i & 63);
+    ism_bit_set(k->used, i);
     k->key[i] = key;
 }
 
@@ -75,16 +76,15 @@ static inline bool keyed_reserve(keyed *k, size_t more)
     keyed old = *k, grown = {NULL, NULL, NULL, old.n, cap};
     grown.key = malloc(cap * sizeof *grown.key);
     grown.val = malloc(cap * sizeof *grown.val);
-    grown.used = calloc(cap / 64, sizeof *grown.used); /* cap: a power of 2, >= 1024 */
+    grown.used = ism_bits_new(cap); /* cap: a power of 2, >= 1024 */
     if (!grown.key || !grown.val || !grown.used) {
         free(grown.key);
         free(grown.val);
         free(grown.used);
         return false;
     }
-    for (size_t w = 0; w < old.cap / 64; w++) /* the used slots, a word of bits at a time */
-        for (uint64_t bits = old.used[w]; bits; bits &= bits - 1) {
-            size_t i = 64 * w + (size_t)__builtin_ctzll(bits);
+    if (old.cap)
+        ISM_BITS_EACH(old.used, ism_bits_words(old.cap), i) { /* the used slots */
             size_t j = keyed_slot(&grown, old.key[i]);
             keyed_claim(&grown, j, old.key[i]);
             grown.val[j] = old.val[i];
