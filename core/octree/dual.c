@@ -48,6 +48,8 @@
  * memset a request and thread; a fresh process: ~320 page faults instead). Values are f and
  * ∇f at lattice points, so what the memo holds changes no mesh. */
 #define DUAL_POINT_MIN_BITS 11
+_Static_assert(DUAL_POINT_MIN_BITS >= 6 && DUAL_POINT_BITS >= DUAL_POINT_MIN_BITS,
+               "the point memo: at least 64 slots (whole words of bits)");
 #define DUAL_POINT_ENTRIES_PER_NODE 4
 
 /* The point memo's entries are not cleared: a bit a slot (worker.filled, util/bits.h) says

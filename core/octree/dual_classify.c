@@ -119,6 +119,8 @@ int ism_dual_box_faces_clear(dual *d, worker *w, const dnode *n, const corner_vi
     return 1;
 }
 
+_Static_assert(ISM_PAIR_MEMO_BITS >= 6, "the pair memo: at least 64 slots (whole words of bits)");
+
 /* The search for a root pair on edge c0 -> c1 of node n (ends of one sign): 0 when there
  * is none. A function of the edge's two lattice points alone (f on the full tape between
  * their coordinates), and up to four nodes of a level share an edge (torus at 1e-2: 432

@@ -9,6 +9,15 @@
 #include <stdlib.h>
 #include "core/util/bits.h"
 
+/* A table's first slots: 1,024 (8 KB of keys, 8 KB of values, 16 words of bits), 512 keys
+ * before it grows; the size the map has had since 1d7f5dd2, not tuned since: the
+ * sphere's pair memo at E 0.0141 grows three times from it (below).
+ * Any power of 2 of at least 64 works — the bitmap's words must be whole (util/bits.h): below
+ * 64 slots there would be no word, and every look-up would read past it. */
+#define KEYED_MIN_CAP 1024
+_Static_assert(KEYED_MIN_CAP >= 64 && (KEYED_MIN_CAP & (KEYED_MIN_CAP - 1)) == 0,
+               "keyed: a power of 2 of at least 64 slots (whole words of bits)");
+
 /* An open-addressed map from 64-bit keys (never 0) to doubles, kept at most half full. Bit
  * i of used says slot i holds a key: only used is cleared when the table is made (cap / 8
  * bytes), not the keys (8 cap): calloc's clearing of key[] was the larger part of a small
@@ -68,7 +77,7 @@ static inline const double *keyed_get(const keyed *k, uint64_t key)
  * memory. */
 static inline bool keyed_reserve(keyed *k, size_t more)
 {
-    size_t cap = k->cap ? k->cap : 1024;
+    size_t cap = k->cap ? k->cap : KEYED_MIN_CAP;
     while (2 * (k->n + more) > cap)
         cap *= 2;
     if (cap == k->cap)
@@ -76,7 +85,7 @@ static inline bool keyed_reserve(keyed *k, size_t more)
     keyed old = *k, grown = {NULL, NULL, NULL, old.n, cap};
     grown.key = malloc(cap * sizeof *grown.key);
     grown.val = malloc(cap * sizeof *grown.val);
-    grown.used = ism_bits_new(cap); /* cap: a power of 2, >= 1024 */
+    grown.used = ism_bits_new(cap); /* cap: a power of 2, >= KEYED_MIN_CAP */
     if (!grown.key || !grown.val || !grown.used) {
         free(grown.key);
         free(grown.val);
