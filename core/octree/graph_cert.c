@@ -1,6 +1,7 @@
 /* graph_cert.c — f strictly monotone along one direction over a node (graph_cert.h). */
 #include "core/octree/graph_cert.h"
 #include "core/eval/interval_ops.h"
+#include "core/expr/scalar_ops.h"
 #include "core/expr/tape.h"
 
 #include <math.h>
@@ -25,14 +26,19 @@ static int slope_sign(const ism_ivgrad *g, const double d[3])
     for (int a = 0; a < 3; a++) {
         if (!isfinite(g->d[a].lo) || !isfinite(g->d[a].hi))
             return 0;
-        /* fmin / fmax as comparisons (no NaN here; a zero's sign cannot change a sum's
-           comparison): libm's are calls, 1,536 of fmax on the sphere at E 0.0141 */
+        /* ism_min / ism_max (comparisons), not libm's fmin / fmax (calls: 1,536 of fmax on
+           the sphere at E 0.0141). They differ only on NaN and a zero's sign; the sign
+           cannot change a sum's comparison, and a NaN p or q comes only from d: g is finite
+           here, but d (one_slope: the sum of every enclosure's midpoint) is not checked and
+           may be ±inf or NaN. Then that axis's term of big is inf or NaN (a bound >= 0 times
+           |d[a]|), so big is inf (margin inf: neither low > margin nor high < -margin) or
+           NaN (!(big > 0)): 0 either way, whatever p and q picked. */
         double al = fabs(g->d[a].lo), ah = fabs(g->d[a].hi);
-        big += (al > ah ? al : ah) * fabs(d[a]);
+        big += ism_max(al, ah) * fabs(d[a]);
         /* the enclosure of ∇f · d over the box: each term's interval scaled by d[a] */
         double p = g->d[a].lo * d[a], q = g->d[a].hi * d[a];
-        low += p < q ? p : q;
-        high += p > q ? p : q;
+        low += ism_min(p, q);
+        high += ism_max(p, q);
     }
     double margin = MIN_SLOPE_FRACTION * big;
     return !(big > 0) ? 0 : low > margin ? 1 : high < -margin ? -1 : 0;
