@@ -11,6 +11,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <string.h>
 #include "core/eval/interval_jet.h"
 #include "core/expr/tape.h"
 #include "core/octree/sampler.h"
@@ -86,14 +87,28 @@ int ism_dual_mean_value_sign(const double f[8], const ism_ivgrad *g, const doubl
  * to first order at x: f = 0 is reached through x). e: the bound (Newton stops once a step
  * is below 1e-3 e: the residual is counted). */
 double ism_dual_kink_dist_near(ism_sampler *s, const double p[3], double plain, double e);
-/* ... the first test inline: every measured midpoint and centroid asks (sphere at E 7.14e-3,
- * 3,204 calls of ~32 instructions each out of line). */
+/* ... for the n points p[0..n) with their plain[0..n), into out[0..n), the first test
+ * inline and made once: every measured midpoint and centroid asks (sphere at E 7.14e-3,
+ * 3,204 calls of ~32 instructions each out of line), the measure's tasks a batch at a time
+ * (dual_measure.c pair_task). */
+static inline void ism_dual_kink_dists(ism_sampler *s, const double (*p)[3],
+                                       const double *plain, double e, double *out, size_t n)
+{
+    if (!ism_tape_top_minmax(s->tape)) { /* no switch surface (as switch_near answers) */
+        memmove(out, plain, n * sizeof *out);
+        return;
+    }
+    for (size_t j = 0; j < n; j++)
+        out[j] = ism_dual_kink_dist_near(s, p[j], plain[j], e);
+}
+
+/* ... for one point: the batch's test and loop, so the two cannot part. */
 static inline double ism_dual_kink_dist(ism_sampler *s, const double p[3], double plain,
                                         double e)
 {
-    if (!ism_tape_top_minmax(s->tape)) /* no switch surface (as switch_near answers) */
-        return plain;
-    return ism_dual_kink_dist_near(s, p, plain, e);
+    double out;
+    ism_dual_kink_dists(s, (const double (*)[3])p, &plain, e, &out, 1);
+    return out;
 }
 
 /* Does a triangle with normal nrm (any length) and centroid c face along the gradient of

@@ -64,11 +64,8 @@ static void pair_task(void *ctx, size_t k, int thread)
         pair_mid(d, keys[lo + j], m[j]);
     ism_sample_grad_batch(&w->s, (const double (*)[3])m, f, g, n);
     ism_plain_dists(&w->s, (const double (*)[3])m, f, (const double (*)[3])g, e, plain, n);
-    if (!ism_tape_top_minmax(w->s.tape)) /* ism_dual_dist's, its first test once a task */
-        memcpy(&dist[lo], plain, n * sizeof *plain);
-    else
-        for (size_t j = 0; j < n; j++)
-            dist[lo + j] = ism_dual_kink_dist_near(&w->s, m[j], plain[j], e);
+    /* ism_dual_dist's, its first test once a task */
+    ism_dual_kink_dists(&w->s, (const double (*)[3])m, plain, e, &dist[lo], n);
 }
 
 /* The midpoint distances of the n vertex pairs in pairs[0..2n) into the memo: those not
