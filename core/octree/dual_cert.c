@@ -244,6 +244,16 @@ typedef struct vmodel {
     vi cv, cd[3], h[6], jd[3], jv;
 } vmodel;
 
+/* vmodel's fields and the ism_dual_model part each holds, (lane field, model field): both
+ * fillers (gather_model, splat_model) run this one list, so a field added to vmodel and here
+ * reaches both, and one missing here is left unset in both. */
+#define VMODEL_FIELDS(X)                                                                  \
+    X(cv, at.v) X(jv, box.v)                                                              \
+    X(cd[0], at.d[0]) X(cd[1], at.d[1]) X(cd[2], at.d[2])                                 \
+    X(jd[0], box.d[0]) X(jd[1], box.d[1]) X(jd[2], box.d[2])                              \
+    X(h[0], box.h[0]) X(h[1], box.h[1]) X(h[2], box.h[2])                                 \
+    X(h[3], box.h[3]) X(h[4], box.h[4]) X(h[5], box.h[5])
+
 /* meet on lanes: max_bound / min_bound's choices */
 INLINE vi vmeet(vi a, vi b)
 {
@@ -257,24 +267,18 @@ INLINE vi gather(const ism_interval *const u[4])
     return (vi){{u[0]->lo, u[1]->lo, u[2]->lo, u[3]->lo}, {u[0]->hi, u[1]->hi, u[2]->hi, u[3]->hi}};
 }
 
-/* Lane j: m[j]'s part (one model in every lane when all four are the same). */
+/* Lane j: m[j]'s part (four different models: ism_dual_over_many's nodes; many_groups pads
+ * a short last group by repeating one). */
 INLINE void gather_model(const ism_dual_model *const m[4], vmodel *M)
 {
     const ism_interval *u[4];
-#define GATHER(dst, field)                  \
-    do {                                    \
-        for (int j = 0; j < 4; j++)         \
-            u[j] = &m[j]->field;            \
-        (dst) = gather(u);                  \
-    } while (0)
-    GATHER(M->cv, at.v);
-    GATHER(M->jv, box.v);
-    for (int a = 0; a < 3; a++) {
-        GATHER(M->cd[a], at.d[a]);
-        GATHER(M->jd[a], box.d[a]);
-    }
-    for (int e = 0; e < 6; e++)
-        GATHER(M->h[e], box.h[e]);
+#define GATHER(dst, field)                                                                 \
+    do {                                                                                   \
+        for (int j = 0; j < 4; j++)                                                        \
+            u[j] = &m[j]->field;                                                           \
+        M->dst = gather(u);                                                                \
+    } while (0);
+    VMODEL_FIELDS(GATHER)
 #undef GATHER
 }
 
@@ -282,14 +286,9 @@ INLINE void gather_model(const ism_dual_model *const m[4], vmodel *M)
  * gathers' loads were ~0.1M of the torus's 16.6M instructions at E 0.0141). */
 INLINE void splat_model(const ism_dual_model *m, vmodel *M)
 {
-    M->cv = v_splat(m->at.v);
-    M->jv = v_splat(m->box.v);
-    for (int a = 0; a < 3; a++) {
-        M->cd[a] = v_splat(m->at.d[a]);
-        M->jd[a] = v_splat(m->box.d[a]);
-    }
-    for (int e = 0; e < 6; e++)
-        M->h[e] = v_splat(m->box.h[e]);
+#define SPLAT(dst, field) M->dst = v_splat(m->field);
+    VMODEL_FIELDS(SPLAT)
+#undef SPLAT
 }
 
 INLINE void store_lanes(vi u, ism_interval *out, size_t stride)
