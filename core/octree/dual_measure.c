@@ -202,20 +202,25 @@ static int clip_of(const dual *d, size_t t)
  * (edge_misses, else centroid_task; 0: within E). Triangles that met E in an earlier round
  * (d->passed) read 0 unmeasured; the rest have their edges, then the centroids of those whose
  * edges pass, measured on the pool, and are remembered when they pass. */
+/* Bytes a triangle of ism_dual_measure_triangles' one block takes, its arrays widest first
+ * (each then starts aligned): at (size_t), tkey (the open triangles' tri_key) and pdist (3
+ * doubles), open, pairs (6) and cen (uint32_t), emiss and cmiss (uint8_t). */
+#define TRI_BLOCK_BYTES                                                                     \
+    (sizeof(size_t) + sizeof(uint64_t) + 3 * sizeof(double) + 8 * sizeof(uint32_t) +       \
+     2 * sizeof(uint8_t))
+
 void ism_dual_measure_triangles(dual *d, const uint32_t *list, size_t n, uint8_t *miss)
 {
     size_t np = 0, nc = 0, room = n ? n : 1;
-    /* one block: at, tkey (the open triangles' tri_key) and pdist (8 bytes each: 5 room),
-       open, pairs and cen (4 bytes: 8 room), emiss and cmiss (2 room) */
-    size_t *at = malloc(74 * room);
-    uint64_t *tkey = (uint64_t *)(at + room);
-    double *pdist = (double *)(tkey + room);
-    uint32_t *open = (uint32_t *)(pdist + 3 * room), *pairs = open + room, *cen = pairs + 6 * room;
-    uint8_t *emiss = (uint8_t *)(cen + room), *cmiss = emiss + room;
+    size_t *at = room <= SIZE_MAX / TRI_BLOCK_BYTES ? malloc(TRI_BLOCK_BYTES * room) : NULL;
     if (!at) {
         d->nomem = true;
         return;
     }
+    uint64_t *tkey = (uint64_t *)(at + room);
+    double *pdist = (double *)(tkey + room);
+    uint32_t *open = (uint32_t *)(pdist + 3 * room), *pairs = open + room, *cen = pairs + 6 * room;
+    uint8_t *emiss = (uint8_t *)(cen + room), *cmiss = emiss + room;
     pairs[0] = 0; /* GCC cannot see that measure_pairs reads only what the loop writes */
     for (size_t k = 0; k < n; k++) {
         uint32_t t = list ? list[k] : (uint32_t)k;
