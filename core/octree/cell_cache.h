@@ -26,7 +26,9 @@
 #define ISM_QUIET_CACHE_BITS 14 /* 256 KB: half the second-level cache */
 
 typedef struct ism_point_entry {
-    uint64_t key; /* 0: empty (lattice keys are stored + 1) */
+    uint64_t key; /* 0: empty (lattice keys are never 0) in the tables cleared to 0; the
+                     dual's memo (dual_tree.h worker.points) is not cleared: there a slot's
+                     bit says it holds a point, and an unmarked slot's key is garbage */
     double f, g[3];
 } ism_point_entry;
 

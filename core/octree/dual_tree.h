@@ -82,7 +82,9 @@ typedef struct worker {
     ism_sampler s;
     ism_ivjet_ws *jet;
     ism_point_entry *points;
-    uint64_t *filled; /* bit i: points[i] holds a point (only this is cleared, not points) */
+    uint64_t *filled; /* bit i: points[i] holds a point (only this is cleared, not points):
+                         an entry's key, f and g mean something only when its bit is set
+                         (key 0 does not mark an empty slot here, as in cell_cache.h) */
     int bits; /* points holds 2^bits entries */
     /* Same-sign edges' root searches (same_sign_edge_clear), made on the first search only
      * (a sphere never searches: no 128 KB to fault in); NULL: none yet, or no memory. */
