@@ -1418,8 +1418,9 @@ static int thread_count(const ism_poly_options *o)
     return ism_threads_resolve(o->threads);
 }
 
-enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o, ism_mesh *mesh,
-                                   ism_dual_stats *st)
+/* ism_dual_mesh, or with grown ism_dual_mesh_grown: the grown box at once, as if seen cut. */
+static enum ism_dual_status dual_mesh(const ism_tape *f, const ism_poly_options *o,
+                                      ism_mesh *mesh, ism_dual_stats *st, bool grown)
 {
     memset(st, 0, sizeof *st);
     ism_mesh_free(mesh);
@@ -1455,7 +1456,7 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     }
     /* a box whose faces f is seen to cross is grown at once (dual_box.h); one that cuts the
      * surface only between the face samples is found by the tree (box_cut), then grown */
-    bool cut = ok && ism_dual_box_seen_cut(&d.w[0].s, o->box, ISM_DUAL_BOX_LOOK);
+    bool cut = ok && (grown || ism_dual_box_seen_cut(&d.w[0].s, o->box, ISM_DUAL_BOX_LOOK));
     enum ism_dual_status status = !ok  ? ISM_DUAL_NO_MEMORY
                                   : cut ? run_in_grown_box(&d, mesh, st)
                                         : run_round_points(&d, mesh, st);
@@ -1481,4 +1482,16 @@ enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o,
     ism_pool_free(d.pool);
     forget(&d);
     return status;
+}
+
+enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o, ism_mesh *mesh,
+                                   ism_dual_stats *st)
+{
+    return dual_mesh(f, o, mesh, st, false);
+}
+
+enum ism_dual_status ism_dual_mesh_grown(const ism_tape *f, const ism_poly_options *o,
+                                         ism_mesh *mesh, ism_dual_stats *st)
+{
+    return dual_mesh(f, o, mesh, st, true);
 }

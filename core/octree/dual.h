@@ -64,4 +64,12 @@ bool ism_dual_wanted(const ism_tape *f, const ism_poly_options *o);
 enum ism_dual_status ism_dual_mesh(const ism_tape *f, const ism_poly_options *o, ism_mesh *mesh,
                                    ism_dual_stats *st);
 
+/* ism_dual_mesh as for a box seen to cut the surface at once: made in the grown box from the
+ * start (dual_box.h), without the first look or a first tree in o->box. Where ism_dual_mesh
+ * finds the cut only in the tree and then makes the mesh again in the grown box, its mesh is
+ * this one bit for bit: nothing of the first tree reaches the second (its point memo is
+ * emptied, its other memos freed). For the tests (test_dual_box.c). */
+enum ism_dual_status ism_dual_mesh_grown(const ism_tape *f, const ism_poly_options *o,
+                                         ism_mesh *mesh, ism_dual_stats *st);
+
 #endif

@@ -5,7 +5,9 @@
  *   mesh is the sphere less 6 caps: dual, χ = 2 − 6 = −4, one piece, 6 boundary loops;
  * - a cylinder of radius 0.6 along z in ±1: cut by the two z faces, χ 0, 2 loops;
  * - a small sphere whose cap pokes through one face between the first look's samples: the
- *   tree finds the cut, the grown box is meshed then: a disc, χ 1, one loop.
+ *   tree finds the cut, the grown box is meshed then: a disc, χ 1, one loop; and that mesh is
+ *   bit for bit the one made in the grown box from the start (ism_dual_mesh_grown): nothing
+ *   of the first tree (its point memo keyed by the old lattice) reaches the second.
  * Everywhere: the boundary loops as many as f's sign regions on the box's faces say (counted
  * on a lattice of the faces, no mesh involved: k disjoint closed curves on the box's surface
  * part it into k + 1 regions), every boundary vertex on a face plane (exactly) and on f = 0
@@ -18,6 +20,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/eval/eval.h"
+#include "core/octree/dual.h"
 #include "core/octree/dual_box.h"
 #include "core/octree/mesher.h"
 #include "core/singular/surface.h"
@@ -287,4 +290,53 @@ Test(dual_box, cap_between_the_face_samples)
      * hair from the face turned against ∇f at every depth until mark_turned snapped it */
     expect_clipped(&poking, poking_dist, base, 2e-3, 1, 1);
     expect_clipped(&poking, poking_dist, base, 1e-3, 1, 1);
+}
+
+/* The poking cap's mesh after the tree found the cut (a first tree in the given box, then
+ * the grown box's) against the grown box's from the start: the same vertices and triangles,
+ * bit for bit, in the three boxes at 2e-3 and 1e-3. The first tree's point memo holds f and
+ * ∇f under the given box's lattice keys; the grown box's lattice gives the same keys to other
+ * points, so a memo not emptied between them answers with the wrong points' values. */
+Test(dual_box, tree_found_cut_meshes_as_grown_from_the_start)
+{
+    static const double base[6] = {-1, -1, -1, 1, 1, 1}, es[2] = {2e-3, 1e-3};
+    ism_tape *t = pf_compile(&poking);
+    for (int which = pf_first_box() - 1; which < 2; which++)
+        for (int k = 0; k < 2; k++) {
+            double box[6];
+            pf_sweep_box(base, DEPTH, which, box);
+            ism_sampler s = {.tape = t, .ws = ism_eval_ws_new(t)};
+            cr_assert(s.ws);
+            cr_assert_not(ism_dual_box_seen_cut(&s, box, ISM_DUAL_BOX_LOOK),
+                          "box %d: the look sees the cap (the tree must find it)", which);
+            ism_eval_ws_free(s.ws);
+            ism_poly_options o;
+            pf_options(&o, box, 3, DEPTH);
+            o.max_error = es[k];
+            o.dual = true;
+            o.threads = 1;
+            ism_mesh a, b;
+            ism_dual_stats sa, sb;
+            ism_mesh_init(&a);
+            ism_mesh_init(&b);
+            cr_assert_eq(ism_dual_mesh(t, &o, &a, &sa), ISM_DUAL_OK, "box %d E %g: declined (%s)",
+                         which, es[k], ism_dual_reason_name(sa.declined));
+            cr_assert_eq(ism_dual_mesh_grown(t, &o, &b, &sb), ISM_DUAL_OK,
+                         "box %d E %g: grown declined (%s)", which, es[k],
+                         ism_dual_reason_name(sb.declined));
+            cr_assert(a.ntris > 0, "box %d E %g: no triangles", which, es[k]);
+            cr_expect_eq(a.nverts, b.nverts, "box %d E %g: %zu vertices, %zu from the start",
+                         which, es[k], a.nverts, b.nverts);
+            cr_expect_eq(a.ntris, b.ntris, "box %d E %g: %zu triangles, %zu from the start", which,
+                         es[k], a.ntris, b.ntris);
+            if (a.nverts == b.nverts && a.ntris == b.ntris) {
+                cr_expect(!memcmp(a.pos, b.pos, 3 * a.nverts * sizeof *a.pos),
+                          "box %d E %g: vertex positions differ", which, es[k]);
+                cr_expect(!memcmp(a.tri, b.tri, 3 * a.ntris * sizeof *a.tri),
+                          "box %d E %g: triangles differ", which, es[k]);
+            }
+            ism_mesh_free(&a);
+            ism_mesh_free(&b);
+        }
+    ism_tape_free(t);
 }
