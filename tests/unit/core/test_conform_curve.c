@@ -63,7 +63,7 @@ static double urand(void) { return (double)rand() / RAND_MAX; }
 
 /* Queries round the curve's box (and beyond it) against the brute force, for reaches from a
  * fraction of the grid's cell to most of the curve. */
-static void check_queries(const double *p, size_t n, bool closed, double step)
+static void check_queries(const double *p, size_t n, bool closed, double step, bool misses_too)
 {
     cf_polyline pl;
     cr_assert(cf_polyline_init(&pl, p, n, closed, step));
@@ -112,8 +112,27 @@ static void check_queries(const double *p, size_t n, bool closed, double step)
         cr_assert(fabs(s2 - s_foot) <= 1e-9 || fabs(s2 - s_true) <= 1e-9,
                   "query %d: parameter %.12g, the foot's %.12g", i, s2, s_foot);
     }
-    cr_assert(hits > NQUERY / 10 && misses > NQUERY / 20, "hits %zu misses %zu", hits, misses);
+    cr_assert(hits > NQUERY / 10 && (!misses_too || misses > NQUERY / 20), "hits %zu misses %zu",
+              hits, misses);
     cf_polyline_free(&pl);
+}
+
+/* check_queries in the three placements (tests/unit/placements.h): the curve moved by
+ * PF_OFF_* and by PF_IRR_* of a step, where the slack of the bounds (seg_low2's, the cells'
+ * sides) scales with the coordinates' magnitude. */
+static void check_placed(const double *p, size_t n, bool closed, double step, bool misses_too)
+{
+    static double moved[3 * NPTS];
+    const double shift[3][3] = {{0, 0, 0},
+                                {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
+                                {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
+    cr_assert(n <= NPTS);
+    for (int sh = 0; sh < 3; sh++) {
+        for (size_t i = 0; i < n; i++)
+            for (int k = 0; k < 3; k++)
+                moved[3 * i + k] = p[3 * i + k] + shift[sh][k];
+        check_queries(moved, n, closed, step, misses_too);
+    }
 }
 
 Test(conform_curve, circle_and_helix)
@@ -126,14 +145,14 @@ Test(conform_curve, circle_and_helix)
         p[3 * i + 1] = -0.2 + 0.8 * sin(a) * 0.6;
         p[3 * i + 2] = 0.8 * sin(a) * 0.8;
     }
-    check_queries(p, NPTS, true, 0.03);
+    check_placed(p, NPTS, true, 0.03, true);
     for (int i = 0; i < NPTS; i++) { /* a helix, three turns */
         double a = 6 * M_PI * i / NPTS;
         p[3 * i] = 0.5 * cos(a);
         p[3 * i + 1] = 0.5 * sin(a);
         p[3 * i + 2] = -1 + 2.0 * i / NPTS;
     }
-    check_queries(p, NPTS, false, 0.02);
+    check_placed(p, NPTS, false, 0.02, true);
 }
 
 Test(conform_curve, axis_and_random_walk)
@@ -145,12 +164,94 @@ Test(conform_curve, axis_and_random_walk)
         p[3 * i + 1] = 0;
         p[3 * i + 2] = 0.5 * i / (NPTS - 1);
     }
-    check_queries(p, NPTS, false, 0.0195);
+    check_placed(p, NPTS, false, 0.0195, true);
     p[0] = p[1] = p[2] = 0;
     for (int i = 1; i < NPTS; i++) /* a random walk, steps up to 0.02 */
         for (int k = 0; k < 3; k++)
             p[3 * i + k] = p[3 * (i - 1) + k] + 0.02 * (urand() - 0.5);
-    check_queries(p, NPTS, false, 0.01);
+    check_placed(p, NPTS, false, 0.01, true);
+}
+
+/* Cells holding hundreds of segments, read in runs of EST_RUN (conform_curve.c): the circle
+ * at a step of 1 (a 2 x 2 x 2 grid: about a hundred segments a cell), the random walk at a
+ * step of 100 (one cell, 399 segments). Reaches are multiples of the step, so nearly every
+ * query finds the curve (misses are not required). */
+Test(conform_curve, crowded_cells)
+{
+    static double p[3 * NPTS];
+    srand(17);
+    for (int i = 0; i < NPTS; i++) {
+        double a = 2 * M_PI * i / NPTS;
+        p[3 * i] = 0.1 + 0.8 * cos(a);
+        p[3 * i + 1] = -0.2 + 0.8 * sin(a) * 0.6;
+        p[3 * i + 2] = 0.8 * sin(a) * 0.8;
+    }
+    check_placed(p, NPTS, true, 1.0, false);
+    p[0] = p[1] = p[2] = 0;
+    for (int i = 1; i < NPTS; i++)
+        for (int k = 0; k < 3; k++)
+            p[3 * i + k] = p[3 * (i - 1) + k] + 0.02 * (urand() - 0.5);
+    check_placed(p, NPTS, false, 100, false);
+}
+
+/* Exact ties: a walk of unit steps along the axes on the integer lattice, kept in a 4-cube
+ * so that it passes the same edges and corners again and again, in one grid cell (step 100:
+ * hundreds of segments, read in runs of EST_RUN), queried at points of the half-integer
+ * lattice. Every coordinate, foot and squared distance is then exact (halves and quarters of
+ * small integers, also moved by 1024 or by -325000), so a tie is a tie in the test's formula
+ * and in the code's. Within one cell the segments are read in their index order, and the
+ * parameter must be exactly the brute force's: the first segment in index order at the
+ * minimum (brute's `d < best`), also where the segment whose midpoint is nearest q
+ * (measured first) comes later. */
+Test(conform_curve, exact_ties_first_segment)
+{
+    enum { NW = 300 };
+    static double p[3 * NW];
+    const double offset[] = {0, 1024, -325000};
+    for (int o = 0; o < 3; o++) {
+        srand(23);
+        int at[3] = {0, 0, 0};
+        for (int i = 0; i < NW; i++) {
+            if (i > 0) {
+                int k = rand() % 3, d = rand() % 2 ? 1 : -1;
+                if (abs(at[k] + d) > 2)
+                    d = -d;
+                at[k] += d;
+            }
+            for (int k = 0; k < 3; k++)
+                p[3 * i + k] = offset[o] + at[k];
+        }
+        cf_polyline pl;
+        cr_assert(cf_polyline_init(&pl, p, NW, false, 100));
+        int distinct_ties = 0;
+        for (int i = 0; i < 2000; i++) {
+            double q[3];
+            for (int k = 0; k < 3; k++)
+                q[k] = offset[o] + 0.5 * (rand() % 13 - 6);
+            double s_true, d_true = brute(p, NW, false, q, &s_true);
+            /* whether another segment at the minimum lies elsewhere on the walk */
+            double len = 0;
+            for (int g = 0; g + 1 < NW; g++) {
+                double t, sg = seg_distance(p + 3 * g, p + 3 * g + 3, q, &t);
+                distinct_ties += sg == d_true && len + t != s_true;
+                len += 1;
+            }
+            const double reach[] = {INFINITY, 1.5, 0.75};
+            double w = reach[i % 3];
+            double s, foot[3], d = cf_polyline_nearest(&pl, q, w, &s, foot);
+            if (d_true > w) {
+                cr_assert(isinf(d), "query %d: %g for a walk %g away", i, d, d_true);
+                continue;
+            }
+            cr_assert(d == d_true, "offset %g query %d: %.17g, brute %.17g", offset[o], i, d,
+                      d_true);
+            cr_assert(s == s_true, "offset %g query %d at %g %g %g: parameter %.17g, the first "
+                      "segment's %.17g", offset[o], i, q[0], q[1], q[2], s, s_true);
+        }
+        cr_assert(distinct_ties > 1000, "offset %g: %d ties elsewhere on the walk", offset[o],
+                  distinct_ties);
+        cf_polyline_free(&pl);
+    }
 }
 
 /* The points tri_in_tube may spare (the edge midpoints and the centroid) of the triangle c,
