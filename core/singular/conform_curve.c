@@ -255,8 +255,14 @@ static inline __attribute__((always_inline)) bool seg_beyond(const cf_polyline *
     return d2 > rr * rr;
 }
 
-/* Segments of a cell read together (cell_min2's buffer; a cell holding more is read in runs
- * of this many). */
+/* Segments of a cell read together (the midpoint distances' buffer of cell_min2 and
+ * nearest_within; a cell holding more is read in runs of this many, each run's nearest
+ * midpoint first). 32: 256 bytes of stack, several times what a cell holds. The tube's grid
+ * cell is its radius (CF_RHO_CELLS = 2.5 mesh cells) and its curves are thinned to points at
+ * least CURVE_MIN_SPACING = 0.5 cell apart, so a branch passing a cell files about 5
+ * segments there (a few more where it bends, a few branches' worth where they cross). A
+ * longer run would only widen the buffer, a shorter one split more cells; the answers are
+ * the same either way (the first of equals is kept across runs). Not measured per preset. */
 #define EST_RUN 32
 
 /* A lower bound of seg_dist2(sg, q), the squared distance as seg_dist2 computes it: the
