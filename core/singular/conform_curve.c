@@ -246,8 +246,8 @@ static inline __attribute__((always_inline)) bool cell_may_hold(const cf_polylin
 /* Whether segment sg lies farther than r from q (d2: the squared distance from q to its
  * midpoint): its ball (midpoint, half its length, grown by its rounding) does. With r a
  * near_bound of the nearest so far, its distance exceeds that nearest's, so it could replace
- * it neither as nearer nor as an equal: not read (Klein bottle at E 0.00327: ~40 segments a
- * query, most of them along the curve well beyond the nearest). */
+ * it neither as nearer nor as an equal: not read (the segments of the cells a query reads
+ * run along the curve, most of them well beyond the nearest). */
 static inline __attribute__((always_inline)) bool seg_beyond(const cf_polyline *pl, size_t sg,
                                                            double d2, double r)
 {
