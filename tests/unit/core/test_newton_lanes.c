@@ -9,6 +9,8 @@
  * or a lane dropped or kept a pass too long, moves a point or a count here. The Klein bottle
  * (its double curve), Steiner's Roman surface (three double lines through a triple point),
  * Kummer's 16 nodes and the cross-cap, in the three placements (pf_sweep_box).
+ * Since both drivers share their steps, also one answer from outside: runs started beside
+ * Kummer's 16 nodes end on their closed-form coordinates.
  *
  * And the pseudo-inverse step in lanes (sym3_lanes.h) against ism_sym3_pinv_step on
  * matrices chosen to take every path of the sweeps: random ones over many scales, diagonal
@@ -114,6 +116,86 @@ Test(newton_lanes, cross_cap)
     ism_tape *t = pf_compile(&s);
     const double box[6] = { -1.3, -1.3, -1.6, 1.3, 1.3, 1.4 };
     expect_lanes_as_runs(t, "cross-cap", box);
+    ism_tape_free(t);
+}
+
+/* Kummer's quartic with mu2 = 2, w = 1 (lambda = 5), its 16 nodes in closed form. On an edge
+ * of the tetrahedron pqrs = 0 two factors vanish, so f = (|P|^2 - 2)^2 and both f and its
+ * gradient vanish where |P|^2 = 2: on p = q = 0 (x = 0, z = 1) at y = ±1, on r = s = 0 at x = ±1
+ * (z = -1), on the other four edges (x = ±(1 - t)/√2, y = ±(1 + t)/√2, z = t) at t = ±1/√2.
+ * The other four lie on the axes through the tetrahedron's vertices (0, ±√2, 1), (±√2, 0, -1):
+ * along P = t v, f(t) = 24t^4 - 40t^3 + 18t^2 - 1 has the double root t = 1/2. */
+static void kummer16_nodes(double n[16][3])
+{
+    const double r2 = sqrt(2.0), t = 1.0 / r2;
+    int c = 0;
+    for (int s = -1; s <= 1; s += 2) {
+        double edge[2][3] = { { 0, s, 1 }, { s, 0, -1 } };
+        double inner[2][3] = { { 0, s * r2 / 2, 0.5 }, { s * r2 / 2, 0, -0.5 } };
+        memcpy(n[c++], edge[0], sizeof edge[0]);
+        memcpy(n[c++], edge[1], sizeof edge[1]);
+        memcpy(n[c++], inner[0], sizeof inner[0]);
+        memcpy(n[c++], inner[1], sizeof inner[1]);
+        for (int sx = -1; sx <= 1; sx += 2)
+            for (int sy = -1; sy <= 1; sy += 2) {
+                double z = s * t;
+                double e[3] = { sx * (1 - z) / r2, sy * (1 + z) / r2, z };
+                memcpy(n[c++], e, sizeof e);
+            }
+    }
+}
+
+/* Kummer's 16 nodes in the three placements: a run from the centre of the depth-6 cell (of
+ * the placed box) that holds a node, held to that cell grown by half its width with the
+ * search's options (start_of in search.c), converges to the closed-form node: within the
+ * step tolerance (quadratic convergence at a node, whose Hessian is non-degenerate). Scalar
+ * and in lanes, the same. This checks the shared steps (run_took_jet, run_wants_step,
+ * run_move) against an answer neither driver computes. */
+Test(newton_lanes, kummer_16_nodes_closed_form)
+{
+    const test_surface *g = test_surface_named("kummer-16-nodes");
+    ism_tape *t = test_surface_compile(g);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert_not_null(ws);
+    double node[16][3];
+    kummer16_nodes(node);
+    for (int w = pf_first_box() - 1; w < 2; w++) {
+        double box[6], p[16][3], lo[16][3], hi[16][3], width = 0.0;
+        pf_sweep_box(g->box, 6, w, box);
+        ism_newton_opts o[16];
+        for (int k = 0; k < 3; k++)
+            width = fmax(width, (box[k + 3] - box[k]) / 64.0);
+        for (int i = 0; i < 16; i++) {
+            for (int k = 0; k < 3; k++) {
+                double e = (box[k + 3] - box[k]) / 64.0;
+                double cell = box[k] + e * floor((node[i][k] - box[k]) / e);
+                p[i][k] = cell + 0.5 * e;
+                lo[i][k] = cell - 0.5 * e;
+                hi[i][k] = cell + 1.5 * e;
+            }
+            o[i] = (ism_newton_opts){ ISM_SING_PINV_REL, width, 1e-10 * width, 64, lo[i], hi[i],
+                                      true };
+        }
+        double lanes[16][3];
+        memcpy(lanes, p, sizeof lanes);
+        ism_newton_result lr[16];
+        ism_sing_newton_lanes(t, ws, lanes, o, lr, 16, NULL);
+        for (int i = 0; i < 16; i++) {
+            ism_newton_result r = ism_sing_newton(t, ws, p[i], &o[i], NULL);
+            double d = 0.0, dl = 0.0;
+            for (int k = 0; k < 3; k++) {
+                d = fmax(d, fabs(p[i][k] - node[i][k]));
+                dl = fmax(dl, fabs(lanes[i][k] - node[i][k]));
+            }
+            cr_expect(r.converged && d <= o[i].tol,
+                      "box %d node %d (%g, %g, %g): converged %d after %d steps, %g away", w, i,
+                      node[i][0], node[i][1], node[i][2], r.converged, r.iterations, d);
+            cr_expect(lr[i].converged && dl <= o[i].tol,
+                      "box %d node %d in lanes: converged %d after %d steps, %g away", w, i,
+                      lr[i].converged, lr[i].iterations, dl);
+        }
+    }
+    ism_eval_ws_free(ws);
     ism_tape_free(t);
 }
 
