@@ -81,7 +81,7 @@ ISM_AVX2_TWICE(void, sweeps4, (const double (*h)[6], double as[4][3][3], double 
     for (int sweep = 0; sweep < ISM_SYM3_MAX_SWEEPS; sweep++) {
         v4d off = v4_abs(a[0][1]) + v4_abs(a[0][2]) + v4_abs(a[1][2]);
         v4d diag = v4_abs(a[0][0]) + v4_abs(a[1][1]) + v4_abs(a[2][2]);
-        live &= (v4i)(off > 1e-300) & ~(v4i)(off <= 1e-18 * diag);
+        live &= (v4i)(off > ISM_SYM3_OFF_TINY) & ~(v4i)(off <= ISM_SYM3_OFF_REL * diag);
         if (!(live[0] | live[1] | live[2] | live[3]))
             break;
         rotate4(a, v, 0, 1, live);

@@ -68,7 +68,7 @@ void ism_sym3_eigen(const double h[6], double eig[3], double vec[3][3])
     for (int sweep = 0; sweep < ISM_SYM3_MAX_SWEEPS; sweep++) {
         double off = fabs(a[0][1]) + fabs(a[0][2]) + fabs(a[1][2]);
         double diag = fabs(a[0][0]) + fabs(a[1][1]) + fabs(a[2][2]);
-        if (!(off > 1e-300) || off <= 1e-18 * diag)
+        if (!(off > ISM_SYM3_OFF_TINY) || off <= ISM_SYM3_OFF_REL * diag)
             break;
         rotate(a, v, 0, 1);
         rotate(a, v, 0, 2);

@@ -14,6 +14,14 @@ void ism_sym3_eigen(const double h[6], double eig[3], double vec[3][3]);
 /* Sweeps of three rotations: Jacobi converges quadratically, 3×3 needs at most ~6; the cap
  * only guards against NaN input. */
 #define ISM_SYM3_MAX_SWEEPS 32
+/* The sweeps stop when the off-diagonal part off = |a01| + |a02| + |a12| is negligible; the
+ * lanes (core/singular/sym3_lanes.c) stop on the same test, so that each lane ends where the
+ * scalar loop does, bit for bit. Not above ISM_SYM3_OFF_TINY (or NaN: the comparison fails):
+ * nothing left to rotate, and a rotation's theta = (aqq - app) / (2 apq) would divide by a
+ * subnormal. At or below ISM_SYM3_OFF_REL × |a00| + |a11| + |a22|: rotating it away moves the
+ * eigenvalues by about off² / gap, far below an ulp (1.1e-16 relative) of the diagonal. */
+#define ISM_SYM3_OFF_TINY 1e-300
+#define ISM_SYM3_OFF_REL 1e-18
 
 /* The end of ism_sym3_eigen, for one that ran the sweeps elsewhere (core/singular/
  * sym3_lanes.c: four matrices side by side): a and v, the swept matrix and the rotations'
