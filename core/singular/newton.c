@@ -82,10 +82,8 @@ static void run_begin(run *u, double p[3], const ism_newton_opts *o)
     *u = (run){ .p = p, .o = o, .r = { false, 0, INFINITY, { 0 }, { 0 } } };
 }
 
-/* The next iterate into u->p (run_step: run_wants_step, the pseudo-inverse step, run_move):
- * true when it moved there and wants its jet; false when the run is over (converged at a
- * zero gradient, out of steps, no step, or the step leaves [lo, hi]: p is then the last
- * point inside). */
+/* Whether the run goes on to a step from the jet at u->p: false when it ended on that jet,
+ * is out of steps, or (setting u->r.converged) its gradient is exactly 0. */
 static bool run_wants_step(run *u)
 {
     if (u->done || u->r.iterations >= u->o->max_iter)
@@ -115,6 +113,9 @@ static bool run_move(run *u, bool ok)
     return true;
 }
 
+/* The next iterate into u->p (run_wants_step, the pseudo-inverse step, run_move): true when
+ * it moved there and wants its jet; false when the run is over (converged at a zero gradient,
+ * out of steps, no step, or the step leaves [lo, hi]: p is then the last point inside). */
 static bool run_step(run *u)
 {
     return run_wants_step(u)
