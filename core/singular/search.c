@@ -804,12 +804,11 @@ static const ism_lbox *shared_from(const keyed_box *boxes, size_t a, size_t i)
  * Which it takes depends on the projections before it, so every pending candidate's own
  * run is taken first, side by side (ism_sing_newton_lanes: each exactly candidate's), and
  * the rule then applied in key order. The runs of candidates that then share are spent
- * for nothing (459 of 3,110 candidates on the Klein bottle at E 0.00327, 73 of 720 on
- * Barth's sextic at 0.0259), and still the runs cost less side by side: the Klein bottle's
- * 44.8M instructions one by one -> 27.8M (their Hessians batched and their pseudo-inverse
- * steps four at a time, sym3_lanes.h). Past the deadline or cancelled: centres and their
- * ranks only (a spent box budget stops the subdivision, not this); w->evals_jet counts every
- * Hessian taken, spent ones too. */
+ * for nothing, and still the runs cost less side by side than one by one (their Hessians
+ * batched and their pseudo-inverse steps four at a time, sym3_lanes.h; measured in commits
+ * fe537109 and f59c663a). Past the deadline or cancelled: centres and their ranks only (a spent
+ * box budget stops the subdivision, not this); w->evals_jet counts every Hessian taken, spent
+ * ones too. */
 static void project_run(void *ctx, size_t task, int thread)
 {
     projection *pr = ctx;

@@ -10,8 +10,7 @@
 
 /* Inlined into the sweep with constant p, q (its three calls) and its loops unrolled by
  * pragma (gcc -O2 keeps them rolled), so the indexing folds away; the same operations in the
- * same order. The singular search's Newton steps spend most of their pseudo-inverse here
- * (the heart: 13.4M -> about 10M instructions in bench_singular). */
+ * same order. The singular search's Newton steps spend most of their pseudo-inverse here. */
 static inline __attribute__((always_inline)) void rotate(double a[3][3], double v[3][3], int p,
                                                          int q)
 {
@@ -87,9 +86,9 @@ int ism_sym3_rank(const double eig[3], double rel)
 }
 
 /* Loops over the three directions are unrolled by pragma here and in search.c's interval
- * tests (gcc -O2 keeps them rolled): the heart's singular stage -1M instructions (this step
- * lived in core/singular/newton.c until the octree's critical-radius test shared it). Inlined
- * into both callers below. */
+ * tests (gcc -O2 keeps them rolled: the singular stage runs this step for every Newton
+ * iterate). This step lived in core/singular/newton.c until the octree's critical-radius
+ * test shared it. Inlined into both callers below. */
 static inline __attribute__((always_inline)) bool pinv_of(const double g[3],
                                                           const double eig[3],
                                                           const double vec[3][3], double rel,
