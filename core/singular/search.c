@@ -55,6 +55,9 @@
  * thread count changes nothing). Cells round a curve on a lattice line (the cross-cap's axis:
  * four cells at each height) sit a few keys apart, well inside one run. */
 #define SEARCH_PROJECT_RUN 64
+/* newton.h's lanes take one run in one pass (ism_sing_newton_lanes would split a longer one) */
+_Static_assert(SEARCH_PROJECT_RUN <= ISM_SING_NEWTON_LANES,
+               "a projection run fits one pass of Newton lanes");
 /* An earlier candidate's projection q serves a candidate X when q lies in X grown by this
  * fraction of its width on each side: on X's face, edge or corner to Newton's own precision
  * (SEARCH_GN_TOL), not beside it. q is then a point of ∇f = 0 in X's closure, which is what
