@@ -191,7 +191,10 @@ typedef struct ism_locus {
     bool incomplete;            /* cut short (budget, deadline, cancel): what is listed is
                                    right, but something may be missing */
     char incomplete_why[96];
-    uint64_t boxes_visited, evals_interval, evals_jet;
+    uint64_t boxes_visited, evals_interval;
+    uint64_t evals_jet;         /* every Hessian taken, including those of projection runs
+                                   spent for nothing (search.c project_run): work done, not
+                                   the answer's size; it moves when the sharing rule does */
     uint64_t centre_dropped;    /* cells the search dropped by f at their centre against the
                                    parent's Taylor form (search.c, children_quad): tests see
                                    that test ran; not in the JSON stats */
