@@ -23,10 +23,7 @@ typedef struct vi {
 
 INLINE v4d splat(double x) { return (v4d){x, x, x, x}; }
 
-INLINE v4d vabs(v4d x)
-{
-    return (v4d)((v4u)x & (v4u){~0ull >> 1, ~0ull >> 1, ~0ull >> 1, ~0ull >> 1});
-}
+INLINE v4d vabs(v4d x) { return v4_abs(x); }
 
 /* interval_ops.h's down1 / up1, min / max (ism_min: a < b ? a : b) and nan_to */
 INLINE v4d vdown1(v4d x)

@@ -13,6 +13,11 @@
 
 #pragma GCC diagnostic ignored "-Wpsabi"
 
+#include <math.h>
+#if defined(__x86_64__)
+#include <emmintrin.h>
+#endif
+
 /* The evaluators' helpers: inlined into each caller, so that one compiled for AVX2 keeps its
  * v4d values in AVX2 registers. */
 #define INLINE static inline __attribute__((always_inline))
@@ -36,6 +41,25 @@ INLINE void v4_st(double *p, v4d v)
 INLINE v4d v4_pick(v4i m, v4d a, v4d b)
 {
     return (v4d)(((v4i)a & m) | ((v4i)b & ~m));
+}
+
+/* |x| lane by lane: the sign bit cleared, as fabs does (NaN stays NaN) */
+INLINE v4d v4_abs(v4d x)
+{
+    const long long mag = 0x7fffffffffffffffLL;
+    return (v4d)((v4i)x & (v4i){ mag, mag, mag, mag });
+}
+
+/* sqrt lane by lane, correctly rounded as sqrt is: SSE2's sqrtpd on each half on x86-64,
+ * which takes no errno path (a negative lane gives NaN, as sqrt's value does). */
+INLINE v4d v4_sqrt(v4d x)
+{
+#if defined(__x86_64__)
+    __m128d lo = _mm_sqrt_pd((__m128d){ x[0], x[1] }), hi = _mm_sqrt_pd((__m128d){ x[2], x[3] });
+    return (v4d){ lo[0], lo[1], hi[0], hi[1] };
+#else
+    return (v4d){ sqrt(x[0]), sqrt(x[1]), sqrt(x[2]), sqrt(x[3]) };
+#endif
 }
 
 /* c where m is set, else +0.0 (all-zero bits) */

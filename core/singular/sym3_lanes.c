@@ -13,28 +13,6 @@
 #include <math.h>
 #include <string.h>
 
-#include <stdint.h>
-#if defined(__x86_64__)
-#include <emmintrin.h>
-#endif
-
-INLINE v4d v4_abs(v4d x)
-{
-    return (v4d)((v4i)x & (v4i){ INT64_MAX, INT64_MAX, INT64_MAX, INT64_MAX });
-}
-
-/* Lane by lane sqrt, correctly rounded as the scalar code's: SSE2's sqrtpd on each half on
- * x86-64 (no errno path to take: the arguments are >= 1 or NaN). */
-INLINE v4d v4_sqrt(v4d x)
-{
-#if defined(__x86_64__)
-    __m128d lo = _mm_sqrt_pd((__m128d){ x[0], x[1] }), hi = _mm_sqrt_pd((__m128d){ x[2], x[3] });
-    return (v4d){ lo[0], lo[1], hi[0], hi[1] };
-#else
-    return (v4d){ sqrt(x[0]), sqrt(x[1]), sqrt(x[2]), sqrt(x[3]) };
-#endif
-}
-
 /* sym3.c's rotate on the lanes set in live (and whose a[p][q] is not 0). */
 INLINE void rotate4(v4d a[3][3], v4d v[3][3], int p, int q, v4i live)
 {
