@@ -157,57 +157,80 @@ ism_newton_result ism_sing_newton(const ism_tape *t, ism_eval_ws *ws, double p[3
     return u.r;
 }
 
+/* One block of runs side by side (ism_sing_newton_lanes): the runs, the unfinished ones
+ * (live[0..nl), indices into u), and the jets of a pass, compacted with live. */
+typedef struct lanes {
+    run u[ISM_SING_NEWTON_LANES];
+    size_t live[ISM_SING_NEWTON_LANES], nl;
+    double g[ISM_SING_NEWTON_LANES][3], h[ISM_SING_NEWTON_LANES][6];
+} lanes;
+
+/* The jets at the live runs' points in one batch, each taken by its run (run_took_jet);
+ * live keeps, in order, the runs that go on to a step, their jets moved along with them.
+ * Returns how many. */
+static size_t lanes_take_jets(const ism_tape *t, ism_eval_ws *ws, lanes *l, uint64_t *evals)
+{
+    double at[ISM_SING_NEWTON_LANES][3], f[ISM_SING_NEWTON_LANES];
+    for (size_t j = 0; j < l->nl; j++)
+        memcpy(at[j], l->u[l->live[j]].p, sizeof at[j]);
+    ism_eval_hessian_batch(t, ws, (const double (*)[3])at, f, l->g, l->h, l->nl);
+    if (evals)
+        *evals += l->nl;
+    size_t keep = 0;
+    for (size_t j = 0; j < l->nl; j++) {
+        run *v = &l->u[l->live[j]];
+        memcpy(v->r.grad, l->g[j], sizeof l->g[j]);
+        memcpy(v->r.hess, l->h[j], sizeof l->h[j]);
+        run_took_jet(v);
+        if (run_wants_step(v)) {
+            if (keep != j) {
+                memcpy(l->g[keep], l->g[j], sizeof l->g[j]);
+                memcpy(l->h[keep], l->h[j], sizeof l->h[j]);
+            }
+            l->live[keep++] = l->live[j];
+        }
+    }
+    return keep;
+}
+
+/* The pseudo-inverse steps of the first n live runs four at a time (sym3_lanes.h), each run
+ * moved by its own (run_move); live then holds, in order, those that moved. */
+static void lanes_take_steps(lanes *l, size_t n)
+{
+    double rel[ISM_SING_NEWTON_LANES], trust[ISM_SING_NEWTON_LANES];
+    double step[ISM_SING_NEWTON_LANES][3];
+    bool ok[ISM_SING_NEWTON_LANES];
+    for (size_t j = 0; j < n; j++) {
+        rel[j] = l->u[l->live[j]].o->rel;
+        trust[j] = l->u[l->live[j]].o->trust;
+    }
+    ism_sym3_pinv_lanes((const double (*)[3])l->g, (const double (*)[6])l->h, rel, trust, step,
+                        ok, n);
+    l->nl = 0;
+    for (size_t j = 0; j < n; j++) {
+        run *v = &l->u[l->live[j]];
+        if (ok[j])
+            memcpy(v->step, step[j], sizeof step[j]);
+        if (run_move(v, ok[j]))
+            l->live[l->nl++] = l->live[j];
+    }
+}
+
 void ism_sing_newton_lanes(const ism_tape *t, ism_eval_ws *ws, double (*p)[3],
                            const ism_newton_opts *o, ism_newton_result *r, size_t n,
                            uint64_t *evals)
 {
+    lanes l;
     for (size_t a = 0; a < n; a += ISM_SING_NEWTON_LANES) {
         size_t m = n - a < ISM_SING_NEWTON_LANES ? n - a : ISM_SING_NEWTON_LANES;
-        run u[ISM_SING_NEWTON_LANES];
-        size_t live[ISM_SING_NEWTON_LANES], nl = m;
-        double at[ISM_SING_NEWTON_LANES][3], f[ISM_SING_NEWTON_LANES];
-        double g[ISM_SING_NEWTON_LANES][3], h[ISM_SING_NEWTON_LANES][6];
-        double rel[ISM_SING_NEWTON_LANES], trust[ISM_SING_NEWTON_LANES];
-        double step[ISM_SING_NEWTON_LANES][3];
-        bool ok[ISM_SING_NEWTON_LANES];
         for (size_t i = 0; i < m; i++) {
-            run_begin(&u[i], p[a + i], &o[a + i]);
-            live[i] = i;
+            run_begin(&l.u[i], p[a + i], &o[a + i]);
+            l.live[i] = i;
         }
-        while (nl) {
-            for (size_t j = 0; j < nl; j++)
-                memcpy(at[j], u[live[j]].p, sizeof at[j]);
-            ism_eval_hessian_batch(t, ws, (const double (*)[3])at, f, g, h, nl);
-            if (evals)
-                *evals += nl;
-            size_t keep = 0;
-            for (size_t j = 0; j < nl; j++) {
-                run *v = &u[live[j]];
-                memcpy(v->r.grad, g[j], sizeof g[j]);
-                memcpy(v->r.hess, h[j], sizeof h[j]);
-                run_took_jet(v);
-                if (run_wants_step(v)) {
-                    if (keep != j) {
-                        memcpy(g[keep], g[j], sizeof g[j]);
-                        memcpy(h[keep], h[j], sizeof h[j]);
-                    }
-                    rel[keep] = v->o->rel;
-                    trust[keep] = v->o->trust;
-                    live[keep++] = live[j];
-                }
-            }
-            ism_sym3_pinv_lanes((const double (*)[3])g, (const double (*)[6])h, rel, trust, step,
-                                ok, keep);
-            nl = 0;
-            for (size_t j = 0; j < keep; j++) {
-                run *v = &u[live[j]];
-                if (ok[j])
-                    memcpy(v->step, step[j], sizeof step[j]);
-                if (run_move(v, ok[j]))
-                    live[nl++] = live[j];
-            }
-        }
+        l.nl = m;
+        while (l.nl)
+            lanes_take_steps(&l, lanes_take_jets(t, ws, &l, evals));
         for (size_t i = 0; i < m; i++)
-            r[a + i] = u[i].r;
+            r[a + i] = l.u[i].r;
     }
 }

@@ -624,14 +624,13 @@ static ism_lbox centre_rank(const search *s, worker *w, const ism_interval x[3])
     return b;
 }
 
-/* Where a finest candidate x's projection starts: its centre, Newton's options (steps within
- * the cell grown by half its width each side; lo, hi point into st). */
+/* Where a finest candidate x's projection starts: its centre, and into *no Newton's options
+ * (steps within the cell grown by half its width each side; lo, hi point into st). */
 typedef struct newton_start {
     double q[3], lo[3], hi[3];
-    ism_newton_opts no;
 } newton_start;
 
-static void start_of(const ism_interval x[3], newton_start *st)
+static void start_of(const ism_interval x[3], newton_start *st, ism_newton_opts *no)
 {
     double width = 0.0;
     for (int k = 0; k < 3; k++) {
@@ -641,8 +640,8 @@ static void start_of(const ism_interval x[3], newton_start *st)
         st->lo[k] = x[k].lo - half;
         st->hi[k] = x[k].hi + half;
     }
-    st->no = (ism_newton_opts){ ISM_SING_PINV_REL, width, SEARCH_GN_TOL * width,
-                                SEARCH_GN_ITERS, st->lo, st->hi, true };
+    *no = (ism_newton_opts){ ISM_SING_PINV_REL, width, SEARCH_GN_TOL * width,
+                             SEARCH_GN_ITERS, st->lo, st->hi, true };
 }
 
 /* The candidate x's box from Newton's run r from its centre, ended at q: projected there with
@@ -668,8 +667,9 @@ static ism_lbox ranked(const search *s, worker *w, const ism_interval x[3], cons
 static ism_lbox candidate(const search *s, worker *w, const ism_interval x[3])
 {
     newton_start st;
-    start_of(x, &st);
-    ism_newton_result r = ism_sing_newton(s->t, w->ws, st.q, &st.no, &w->evals_jet);
+    ism_newton_opts no;
+    start_of(x, &st, &no);
+    ism_newton_result r = ism_sing_newton(s->t, w->ws, st.q, &no, &w->evals_jet);
     return ranked(s, w, x, st.q, &r);
 }
 
@@ -835,8 +835,7 @@ static void project_run(void *ctx, size_t task, int thread)
         ism_interval x[3];
         for (int k = 0; k < 3; k++)
             x[k] = iv(kb->box.lo[k], kb->box.hi[k]);
-        start_of(x, &st[n]);
-        no[n] = st[n].no;
+        start_of(x, &st[n], &no[n]);
         memcpy(p[n], st[n].q, sizeof p[n]);
         lane[i - a] = n++;
     }
