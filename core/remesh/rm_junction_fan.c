@@ -302,7 +302,9 @@ static bool trial(rm_pass *p, const jf_try *q, const double cx[3], const double 
         rm_commit_move(p, q->x, xx, xg);
     flip(p, q);
     measure(p, q, reg, n, after);
-    bool pass = after->at_j > before->at_j && after->least > before->least &&
+    /* J's angle must grow (progress); the region's least only not shrink: an untouched
+       needle elsewhere in the region (at w or x) holds the least and must not block J */
+    bool pass = after->at_j > before->at_j && after->least >= before->least &&
                 after->needles <= before->needles && facing_ok(p, q, reg, n) &&
                 rm_distances_ok(p, after->far_c, after->far_m, before->far_c, before->far_m);
     if (pass && keep)
