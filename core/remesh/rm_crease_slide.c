@@ -53,11 +53,6 @@
 /* Fans of more triangles than this are not slid (the fan walk keeps them on the stack; the
  * polygoniser's crease vertices have about 6). */
 #define ISM_RM_CREASE_SLIDE_MAX_DEGREE 24
-/* A vertex is on the crease when both branches measure within this × v's mean edge of 0
- * (|a| / |∇a|, first order), and Newton stops there (the gyroid ball's moved vertices: under
- * 2e-11 from either surface by their closed forms); the polygoniser's edge roots beside the
- * crease lie 1e-5 of an edge and more off. */
-#define ISM_RM_CREASE_ON_REL 1e-9
 /* A vertex is beside the crease, and snapped onto it, when both branches measure within
  * this × its mean edge: the gyroid ball's locked vertices lie up to ~0.3 of an edge off the
  * other branch's surface, the cube-minus-ball's chamfer vertices (a thin strip of short
@@ -67,13 +62,6 @@
  * 49 / 58, gyroid-ball 19 / 20 / 24 / 19 -> 16 / 17 / 13 / 21, but the cube 0 / 0 / 0 / 0
  * -> 0 / 0 / 4 / 4 (as before session 15). */
 #define ISM_RM_CREASE_NEAR_REL 0.75
-/* Minimum-norm Newton steps onto a = b = 0 at most (quadratic: from a fraction of an edge
- * off, 3-4 reach ISM_RM_CREASE_ON_REL). */
-#define ISM_RM_CREASE_NEWTON_STEPS 8
-/* The branches' gradients count as parallel (the crease not transversal: no curve to slide
- * on) when the 2 × 2 normal system's determinant is under this share of its diagonal's
- * product (crease_split.c's rule: a crossing angle under 1e-6 rad). */
-#define ISM_RM_CREASE_PARALLEL 1e-12
 /* Newton may land at most this × the mean edge from where it started (farther: it found
  * another part of the crease curve). A vertex within ISM_RM_CREASE_NEAR_REL of both surfaces
  * lies up to about that / sin(crease angle) from the crease along its own surface: the

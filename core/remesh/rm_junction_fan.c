@@ -25,14 +25,10 @@
 /* A piece vanishes at a vertex when |value| / |∇| is within this × the junction's fan's mean
  * edge: the polygoniser's junction and crease points lie on their surfaces to rounding
  * (three-balls: ~1e-9 of an edge), its edge roots beside a crease 1e-5 of an edge and more
- * off (rm_crease_slide.c's ISM_RM_CREASE_ON_REL measures the same). */
+ * off. This reads which pieces a vertex the polygoniser placed lies on; where this file
+ * places a vertex (Newton onto two pieces) it lands by ISM_RM_CREASE_ON_REL, the crease
+ * slides' own test, so that they read it as on its crease. */
 #define ISM_RM_JFAN_ON_REL 1e-6
-/* Newton steps onto two pieces' common zero (rm_crease_slide.c's count: from a vertex beside
- * the crease it lands at rounding in three or four). */
-#define ISM_RM_JFAN_NEWTON_STEPS 8
-/* The min-norm step's test for two pieces' gradients too near parallel (rm_crease_slide.c's
- * ISM_RM_CREASE_PARALLEL). */
-#define ISM_RM_JFAN_PARALLEL 1e-12
 /* Where c slides to: this share of the way from J to its next vertex on the crease, tried in
  * this order, the best kept (crowd28's check against the balls' exact geometry: at 1/4 every
  * triangle about the point ≥ 15.7°, at 1/2 a needle of 8.81° at c's other side). */
@@ -45,10 +41,11 @@ static const double slide_share[] = {0.25, 0.375, 0.125};
  * ISM_RM_COLLAPSE_MAX_DEGREE). */
 #define ISM_RM_JFAN_REGION (4 * ISM_RM_COLLAPSE_MAX_DEGREE)
 
-/* The three pieces meeting at J and the tolerance they are read with. */
+/* The three pieces meeting at J, the tolerance they are read with, and J's mean edge. */
 typedef struct jf_pieces {
     ism_piece pc[3];
-    double tol; /* ISM_RM_JFAN_ON_REL × J's mean edge */
+    double tol;       /* ISM_RM_JFAN_ON_REL × J's mean edge */
+    double mean_edge; /* J's fan's */
 } jf_pieces;
 
 /* Piece pc's |value| / |∇| at x (INFINITY where ∇ vanishes or nothing is finite). */
@@ -66,6 +63,7 @@ static bool pieces_at(rm_pass *p, uint32_t v, double mean_edge, jf_pieces *s)
     const rm_mesh *r = &p->r;
     int n = 0;
     s->tol = ISM_RM_JFAN_ON_REL * mean_edge;
+    s->mean_edge = mean_edge;
     for (uint32_t i = 0; i < r->count[v]; i++) {
         const uint32_t *t = r->m->tri + 3 * (size_t)rm_slot(r, v, i);
         for (int k = 0; k < 3; k++)
@@ -99,25 +97,35 @@ static int vanishing(rm_pass *p, const jf_pieces *s, const double *x)
     return bits;
 }
 
-/* Newton from x onto the common zero of pieces a and b; g gets ∇f there. False when it does
- * not land within tol. */
-static bool onto_pair(rm_pass *p, ism_piece a, ism_piece b, double x[3], double tol,
+/* Newton from x onto the common zero of pieces a and b, to within ISM_RM_CREASE_ON_REL ×
+ * J's mean edge of both and one step more (rm_crease_slide.c's to_crease: from within that
+ * it lands at rounding); g gets ∇f there. False when it does not get there, or f itself does
+ * not vanish there: past J the two pieces' common curve runs inside the third piece's solid,
+ * where f is the third piece's value, not 0. */
+static bool onto_pair(rm_pass *p, const jf_pieces *s, ism_piece a, ism_piece b, double x[3],
                       double g[3])
 {
-    for (int it = 0; it <= ISM_RM_JFAN_NEWTON_STEPS; it++) {
+    double tol = ISM_RM_CREASE_ON_REL * s->mean_edge;
+    for (int it = 0; it <= ISM_RM_CREASE_NEWTON_STEPS; it++) {
         double val[2], gr[2][3], step[3];
         val[0] = ism_eval_piece_gradient(p->f, p->ws, a, x[0], x[1], x[2], gr[0]);
         val[1] = ism_eval_piece_gradient(p->f, p->ws, b, x[0], x[1], x[2], gr[1]);
         if (!isfinite(val[0]) || !isfinite(val[1]))
             return false;
-        if (fabs(val[0]) <= tol * ism_norm3(gr[0]) && fabs(val[1]) <= tol * ism_norm3(gr[1])) {
-            ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g);
-            return ism_norm3(g) > p->gthresh;
-        }
-        if (!ism_min_norm_step(2, (const double(*)[3])gr, val, ISM_RM_JFAN_PARALLEL, step))
+        bool on = fabs(val[0]) <= tol * ism_norm3(gr[0]) && fabs(val[1]) <= tol * ism_norm3(gr[1]);
+        if (!on && it == ISM_RM_CREASE_NEWTON_STEPS)
             return false;
-        for (int k = 0; k < 3; k++)
-            x[k] += step[k];
+        if (!ism_min_norm_step(2, (const double(*)[3])gr, val, ISM_RM_CREASE_PARALLEL, step)) {
+            if (!on)
+                return false;
+        } else {
+            for (int k = 0; k < 3; k++)
+                x[k] += step[k];
+        }
+        if (!on)
+            continue;
+        double v = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g), gn = ism_norm3(g);
+        return gn > p->gthresh && fabs(v) <= tol * gn;
     }
     return false;
 }
@@ -394,7 +402,7 @@ static void snap_x(rm_pass *p, const jf_pieces *s, const jf_try *q, double xx[3]
     const double *x = rm_pos(p, q->x);
     int near = piece_off(p, s->pc[a], x) <= piece_off(p, s->pc[b], x) ? a : b;
     memcpy(xx, x, 3 * sizeof *xx);
-    *snapped = onto_pair(p, s->pc[k], s->pc[near], xx, s->tol, xg) &&
+    *snapped = onto_pair(p, s, s->pc[k], s->pc[near], xx, xg) &&
                rm_dist(xx, x) <= ISM_RM_JFAN_SNAP_REACH * rm_dist(x, rm_pos(p, q->J));
 }
 
@@ -423,7 +431,7 @@ static void try_shares(rm_pass *p, const jf_pieces *s, const jf_try *q, jf_best 
         const double *J = rm_pos(p, q->J), *far = rm_pos(p, q->far);
         for (int d = 0; d < 3; d++)
             cx[d] = J[d] + slide_share[h] * (far[d] - J[d]);
-        if (!onto_pair(p, s->pc[a], s->pc[b], cx, s->tol, cg) ||
+        if (!onto_pair(p, s, s->pc[a], s->pc[b], cx, cg) ||
             !trial(p, q, cx, cg, snapped ? xx : NULL, xg, &before, &after, false) ||
             !(after.at_j > best->at_j))
             continue;

@@ -71,6 +71,19 @@ static inline double rm_crease_cos(void)
  * crease the outer edge may be the crease's own, bending by tens of degrees, and moving a
  * vertex by a hair (or along a curved crease) changes that by a little either way. */
 #define ISM_RM_CROWD_BEND_DEG 10.0
+/* A vertex is on a crease when both of its functions (a min/max's branches, or two of f's
+ * pieces) measure within this × the mean edge of 0 (|a| / |∇a|, first order), and Newton
+ * onto the crease stops there and takes one step more (rm_crease_slide.c, rm_junction_fan.c;
+ * the gyroid ball's moved vertices: under 2e-11 from either surface by their closed forms);
+ * the polygoniser's edge roots beside the crease lie 1e-5 of an edge and more off. */
+#define ISM_RM_CREASE_ON_REL 1e-9
+/* Minimum-norm Newton steps onto a = b = 0 at most (quadratic: from a fraction of an edge
+ * off, 3-4 reach ISM_RM_CREASE_ON_REL). */
+#define ISM_RM_CREASE_NEWTON_STEPS 8
+/* The two functions' gradients count as parallel (the crease not transversal: no curve to
+ * slide on) when the 2 × 2 normal system's determinant is under this share of its diagonal's
+ * product (crease_split.c's rule: a crossing angle under 1e-6 rad). */
+#define ISM_RM_CREASE_PARALLEL 1e-12
 /* A crease vertex nearer a neighbour than this × its mean edge crowds the crease: merged
  * into it (rm_collapse.c; on a min/max crease, where both go onto a = b = 0, farther
  * neighbours merge too: rm_crease_slide.c ISM_RM_CREASE_MERGE_REL), the crease moves by at most that much (the gyroid ball's crease vertices 1/20 to 1/400
