@@ -13,7 +13,9 @@
  * angle grows, no triangle about J, c, w and x ends thinner than the thinnest there before
  * nor more of them under 10°, every triangle it changes faces its own piece's ∇f, and its
  * new centroids and midpoints keep the collapses' distance rule (rm_distances_ok); otherwise
- * it is undone, bit for bit (places, normals, triangles, slots). */
+ * it is undone: places, normals, triangles and slots as they were, bit for bit; the caches
+ * of what they measure (the two triangles' centroid bounds, the moved fans' shapes) are
+ * dropped, to be measured again when asked. */
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
 #include "core/util/min_norm.h"
@@ -137,8 +139,8 @@ typedef struct jf_try {
     int ab; /* bits of c's two pieces in jf_pieces */
 } jf_try;
 
-/* What the operation changes, to undo it bit for bit: c's and x's places and normals, the
- * flip's triangles and the slots of c and w (a slot removed takes the last one's place). */
+/* What the operation changes, to undo it: c's and x's places and normals, the flip's
+ * triangles and the slots of c and w (a slot removed takes the last one's place). */
 typedef struct jf_saved {
     double pos[2][3], normal[2][3];
     float mnormal[2][3];
@@ -153,10 +155,9 @@ static void save_vertex(const rm_pass *p, uint32_t v, jf_saved *s, int i)
     memcpy(s->mnormal[i], p->r.m->normal + 3 * (size_t)v, sizeof s->mnormal[i]);
 }
 
+/* v (saved at i) back where it was, with its normals; the caller says it moved. */
 static void restore_vertex(rm_pass *p, uint32_t v, const jf_saved *s, int i)
 {
-    if (!memcmp(s->pos[i], rm_pos(p, v), sizeof s->pos[i]))
-        return;
     rm_commit_move(p, v, s->pos[i], s->normal[i]);
     memcpy(p->normal + 3 * (size_t)v, s->normal[i], sizeof s->normal[i]);
     memcpy(p->r.m->normal + 3 * (size_t)v, s->mnormal[i], sizeof s->mnormal[i]);
@@ -318,7 +319,8 @@ static bool trial(rm_pass *p, const jf_try *q, const double cx[3], const double 
     if (pass && keep)
         return true;
     unflip(p, q, &s);
-    restore_vertex(p, q->x, &s, 1);
+    if (xx)
+        restore_vertex(p, q->x, &s, 1);
     restore_vertex(p, q->c, &s, 0);
     return pass;
 }
