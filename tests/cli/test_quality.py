@@ -500,16 +500,25 @@ class GoalsUnderTheDefaultBound(unittest.TestCase):
                     self.assertGreaterEqual(min(fan), floor)
 
 
-def three_balls_triple_points():
-    """Where the three spheres of `three-balls` (proto/presets.c: radius^2 0.5 around (0.6, 0,
-    0), (-0.3, +-0.52, 0)) meet: the second minus the third gives y = 0, the first minus the
-    second -1.8 x = 0.52^2 - 0.6^2 + 0.3^2, then z from the first."""
-    x = (0.6 ** 2 - 0.3 ** 2 - 0.52 ** 2) / 1.8
-    z = math.sqrt(0.5 - (x - 0.6) ** 2)
-    return [(x, 0.0, z), (x, 0.0, -z)]
-
-
+# three-balls (proto/presets.c): the balls' centres and their common radius (radius^2 0.5).
 THREE_BALLS = ([(0.6, 0.0, 0.0), (-0.3, 0.52, 0.0), (-0.3, -0.52, 0.0)], math.sqrt(0.5))
+
+
+def three_balls_triple_points():
+    """Where the three spheres of THREE_BALLS meet: subtracting sphere 0's equation from
+    sphere i's leaves the plane 2 (c_i - c_0) . p = |c_i|^2 - |c_0|^2; the centres lie in
+    z = 0, so the two planes fix x and y (Cramer's rule) and sphere 0 gives z = +-sqrt(r^2 -
+    |(x, y) - c_0|^2)."""
+    centres, r = THREE_BALLS
+    assert all(c[2] == 0 for c in centres)
+    c0 = centres[0]
+    rows = [(2 * (c[0] - c0[0]), 2 * (c[1] - c0[1]),
+             sum(v * v for v in c) - sum(v * v for v in c0)) for c in centres[1:]]
+    (a, b, e), (c, d, f) = rows
+    det = a * d - b * c
+    x, y = (e * d - b * f) / det, (a * f - e * c) / det
+    z = math.sqrt(r * r - (x - c0[0]) ** 2 - (y - c0[1]) ** 2)
+    return [(x, y, z), (x, y, -z)]
 
 
 def three_balls_distance(p):
@@ -518,7 +527,9 @@ def three_balls_distance(p):
     other ball, to 1e-12) — each sphere's radial projection of p, the point of each pair's
     crease circle nearest p, the triple points. The nearest surface point is one of them (in a
     face: a critical point of the distance on its sphere; on a crease: on its circle; or a
-    corner), so this is exact but where p lies on a sphere's centre or a circle's axis."""
+    corner), so this is exact (at a sphere's centre or on a circle's axis too: every point of
+    that sphere or circle is then equally far, and the triple points, candidates always, lie
+    on both)."""
     centres, r = THREE_BALLS
 
     def outside_others(q, skip):
