@@ -494,10 +494,40 @@ static bool mend_at(rm_pass *p, uint32_t J, bool *ok)
     return true;
 }
 
+/* J's where a mend failed since the last one kept, remembered so that J's other needles do
+ * not read its pieces and run its trials again (a failed mend changes nothing, so it would
+ * fail again until some mend elsewhere changes the mesh): a triple point's fan holds a few. */
+#define ISM_RM_JFAN_FAILED 8
+
+typedef struct jf_failed {
+    uint32_t v[ISM_RM_JFAN_FAILED];
+    int n;
+} jf_failed;
+
+static bool failed_has(const jf_failed *f, uint32_t J)
+{
+    for (int i = 0; i < f->n; i++)
+        if (f->v[i] == J)
+            return true;
+    return false;
+}
+
+/* J remembered (the oldest forgotten when full: it is then only tried again). */
+static void failed_add(jf_failed *f, uint32_t J)
+{
+    if (f->n < ISM_RM_JFAN_FAILED)
+        f->v[f->n++] = J;
+    else {
+        memmove(f->v, f->v + 1, (ISM_RM_JFAN_FAILED - 1) * sizeof *f->v);
+        f->v[ISM_RM_JFAN_FAILED - 1] = J;
+    }
+}
+
 size_t rm_junction_fan_mend(rm_pass *p, bool *ok)
 {
     const ism_mesh *m = p->r.m;
     size_t made = 0;
+    jf_failed failed = {.n = 0};
     if (!ism_tape_has_min_max(p->f))
         return 0;
     for (size_t t = 0; t < m->ntris && *ok; t++) {
@@ -505,10 +535,15 @@ size_t rm_junction_fan_mend(rm_pass *p, bool *ok)
             continue;
         for (int k = 0; k < 3; k++) {
             uint32_t J = m->tri[3 * t + k];
-            if (p->r.locked[J] && rm_junction_vertex_on(p, J) && mend_at(p, J, ok)) {
+            if (!p->r.locked[J] || failed_has(&failed, J) || !rm_junction_vertex_on(p, J))
+                continue;
+            if (mend_at(p, J, ok)) {
                 made++;
+                failed.n = 0; /* the mesh changed: every J may mend now */
                 break;
             }
+            if (*ok)
+                failed_add(&failed, J);
         }
     }
     p->flips += made;
