@@ -29,7 +29,9 @@ typedef struct ism_remesh_options {
 } ism_remesh_options;
 
 typedef struct ism_remesh_stats {
-    size_t flips, moves;           /* edge flips made, vertex moves accepted */
+    size_t flips, moves;           /* edge flips made (with a junction's fan mended, each a
+                                      flip that moves two vertices too: rm_junction_fan.c),
+                                      vertex moves accepted */
     size_t collapses;              /* edges collapsed (each removes a vertex, two triangles) */
     size_t inserts;                /* vertices inserted beside a needle's short feature edge
                                       (each adds two triangles) */
