@@ -309,14 +309,61 @@ static inline uint32_t arg_first(uint32_t o, uint32_t arg)
     return o == 0 ? arg : o == arg ? 0 : o;
 }
 
+/* The nearest segment nearest_within holds: which, and its foot (the parameter t on it and
+ * the point). */
+typedef struct {
+    size_t sg;
+    double t, f[3];
+} near_hit;
+
+/* The segments filed in cell c measured against best (a squared distance; returned lowered
+ * to the nearest found), r its near_bound. Each run of EST_RUN is read the nearest midpoint
+ * first (arg_first), then of the others only those the ball test (seg_beyond) passes and whose
+ * bound (seg_low2) is below best: any other is no nearer. With hit NULL (the distance alone)
+ * only a nearer one is taken. With hit, one whose bound equals best is measured too, an equal
+ * one is taken when it comes earlier in the run than the one held from this run (measured
+ * first only for its midpoint), and *hit names the nearest: the first of equals in the cell's
+ * order, as reading every segment in order with `<` would keep. */
+static inline __attribute__((always_inline)) double cell_runs(const cf_polyline *pl, size_t c,
+                                                            const double q[3], double mag,
+                                                            double best, double r,
+                                                            near_hit *hit)
+{
+    for (uint32_t x0 = pl->g_start[c]; x0 < pl->g_start[c + 1]; x0 += EST_RUN) {
+        uint32_t n = pl->g_start[c + 1] - x0 < EST_RUN ? pl->g_start[c + 1] - x0 : EST_RUN;
+        const uint32_t *sg = pl->g_seg + x0;
+        double d2[EST_RUN];
+        uint32_t arg = mid_nearest(pl, sg, n, q, d2), held = EST_RUN;
+        for (uint32_t o = 0; o < n; o++) {
+            uint32_t m = arg_first(o, arg);
+            if (seg_beyond(pl, sg[m], d2[m], r))
+                continue; /* farther than best */
+            double low = seg_low2(pl, sg[m], q, mag);
+            if (hit ? !(low <= best) : !(low < best))
+                continue; /* farther than best (with hit), no nearer (without) */
+            double t = 0, f[3] = {0, 0, 0};
+            double e = seg_dist2(pl, sg[m], q, hit ? &t : NULL, hit ? f : NULL);
+            if (e < best || (hit && e == best && m < held && held < EST_RUN)) {
+                best = e;
+                r = near_bound(best, mag);
+                if (hit) {
+                    held = m;
+                    hit->sg = sg[m];
+                    hit->t = t;
+                    for (int u = 0; u < 3; u++)
+                        hit->f[u] = f[u];
+                }
+            }
+        }
+    }
+    return best;
+}
+
 /* The nearest point of the segments filed in the cells within `within` of q (INFINITY when
  * none lies that close). A cell whose box is farther than the nearest so far is skipped:
  * none of its segments would have replaced it (the first of equals is kept), so the answer
- * is the one of reading them all. Each run of a cell's segments is measured as cell_min2's
- * (the nearest midpoint first, then those the ball test and the bound leave); an equal one
- * earlier in the run than the one held replaces it, so the answer is still the first of
- * equals in the cells' and runs' order (Klein bottle at E 0.00327: the zip's 2,168 queries
- * 15.4M before). */
+ * is the one of reading them all, the first of equals in the cells' and runs' order
+ * (cell_runs; Klein bottle at E 0.00327: the zip's 2,168 queries 15.4M before). */
 static double nearest_within(const cf_polyline *pl, const double q[3], double within, double *s,
                              double foot[3])
 {
@@ -330,45 +377,21 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
     int a[3], b[3];
     cell_range(pl, lo, hi, a, b);
     double best = INFINITY, mag = cf_max2(fabs(q[0]), cf_max2(fabs(q[1]), fabs(q[2])));
-    double best_t = 0, best_f[3] = {0, 0, 0};
-    size_t best_sg = 0;
+    near_hit hit = {0, 0, {0, 0, 0}};
     for (int k = a[2]; k <= b[2]; k++)
         for (int j = a[1]; j <= b[1]; j++)
             for (int i = a[0]; i <= b[0]; i++) {
                 size_t c = cell_index(pl, i, j, k);
                 double r;
-                if (!cell_may_hold(pl, c, q, best, mag, &r))
-                    continue;
-                for (uint32_t x0 = pl->g_start[c]; x0 < pl->g_start[c + 1]; x0 += EST_RUN) {
-                    uint32_t n = pl->g_start[c + 1] - x0 < EST_RUN ? pl->g_start[c + 1] - x0
-                                                                   : EST_RUN;
-                    const uint32_t *sg = pl->g_seg + x0;
-                    double d2[EST_RUN];
-                    uint32_t arg = mid_nearest(pl, sg, n, q, d2), held = EST_RUN;
-                    for (uint32_t o = 0; o < n; o++) {
-                        uint32_t m = arg_first(o, arg);
-                        if (seg_beyond(pl, sg[m], d2[m], r) ||
-                            !(seg_low2(pl, sg[m], q, mag) <= best))
-                            continue; /* farther than best */
-                        double t, f[3], e = seg_dist2(pl, sg[m], q, &t, f);
-                        if (e < best || (e == best && m < held && held < EST_RUN)) {
-                            best = e;
-                            r = near_bound(best, mag);
-                            held = m;
-                            best_sg = sg[m];
-                            best_t = t;
-                            for (int u = 0; u < 3; u++)
-                                best_f[u] = f[u];
-                        }
-                    }
-                }
+                if (cell_may_hold(pl, c, q, best, mag, &r))
+                    best = cell_runs(pl, c, q, mag, best, r, &hit);
             }
     if (best < INFINITY) {
         if (s)
-            *s = pl->s[best_sg] + best_t * (pl->s[best_sg + 1] - pl->s[best_sg]);
+            *s = pl->s[hit.sg] + hit.t * (pl->s[hit.sg + 1] - pl->s[hit.sg]);
         if (foot)
             for (int u = 0; u < 3; u++)
-                foot[u] = best_f[u];
+                foot[u] = hit.f[u];
     }
     best = sqrt(best);
     return best <= within ? best : INFINITY;
@@ -379,10 +402,8 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
  * query, most of them empty (crossing-spheres' tube: 178k calls, callgrind). The ring
  * search's segments are short beside its queries' distances, so read in the cell's order the
  * ball test (seg_beyond) passed most of them on the way to the nearest (Klein bottle at
- * E 0.00327: 9 measured a query). So the segment whose midpoint is nearest q is measured
- * first, then of the others only those the ball test passes and whose bound (seg_low2) is
- * below the nearest measured: any other is no nearer than it, so the minimum is the one of
- * measuring all (ties need no order: the distance alone is asked). */
+ * E 0.00327: 9 measured a query): cell_runs measures the nearest midpoint's first (ties need
+ * no order: the distance alone is asked). */
 static inline __attribute__((always_inline)) double cell_min2(const cf_polyline *pl, int i,
                                                             int j, int k, const double q[3],
                                                             double best, double mag)
@@ -391,23 +412,7 @@ static inline __attribute__((always_inline)) double cell_min2(const cf_polyline 
     double r;
     if (!cell_may_hold(pl, c, q, best, mag, &r))
         return best;
-    for (uint32_t x0 = pl->g_start[c]; x0 < pl->g_start[c + 1]; x0 += EST_RUN) {
-        uint32_t n = pl->g_start[c + 1] - x0 < EST_RUN ? pl->g_start[c + 1] - x0 : EST_RUN;
-        const uint32_t *sg = pl->g_seg + x0;
-        double d2[EST_RUN];
-        uint32_t arg = mid_nearest(pl, sg, n, q, d2);
-        for (uint32_t o = 0; o < n; o++) {
-            uint32_t m = arg_first(o, arg);
-            if (seg_beyond(pl, sg[m], d2[m], r) || !(seg_low2(pl, sg[m], q, mag) < best))
-                continue; /* no nearer than best */
-            double e = seg_dist2(pl, sg[m], q, NULL, NULL);
-            if (e < best) {
-                best = e;
-                r = near_bound(best, mag);
-            }
-        }
-    }
-    return best;
+    return cell_runs(pl, c, q, mag, best, r, NULL);
 }
 
 /* The cells at Chebyshev distance ring (in cells) from cell c, within the grid: the smallest
