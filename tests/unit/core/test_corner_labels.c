@@ -2,7 +2,8 @@
  * (plot_test.c corner_branch): where a corner's labelled branch is the one f's own derivative
  * follows, the memo keeps the corner's ∇f as that branch's gradient instead of evaluating it
  * (ism_crease_branch). Checked on every level-4 node of Barth's sextic in its ball and of the
- * gyroid in its ball (box ±1.6, depth 6), in the three placements (pf_sweep_box): each memo
+ * gyroid in its ball (box ±1.6, depth 6), in the three placements (pf_sweep_box), the
+ * corners' ∇f taken as the build takes them (ism_point_memo_many: the batch evaluator): each memo
  * gradient equals, bit for bit, the one ism_crease_branch evaluates at that corner, and each
  * node's verdict (ism_plot_test, and its blind flag) is the one it gets with no memo at all.
  * And at a tie (a == b at a corner: f's derivative takes b, the label a; test_plot_test_tie.c's
@@ -24,6 +25,9 @@
 #define DEPTH 6  /* the lattice: 64 steps an axis */
 #define LEVEL 4  /* the nodes tested: 16^3, 4 steps across */
 #define HALF 1.6 /* the box: ±1.6 (both balls, r 1.5, inside) */
+/* The sweep's point memo: 2^19 slots for the lattice's 65^3 points, so that nearly every
+ * corner stays (the build's ISM_CORNER_MEMO_BITS table evicts more; either is bit for bit). */
+#define POINT_BITS 19
 
 /* The build's three node memos, zeroed (cell_cache.h). */
 typedef struct memos {
@@ -93,6 +97,8 @@ static void sweep(const pf_surface *surf, int placement)
     ism_flatness fl = flatness(2e-2, box); /* nodes of 0.2: judged by their corners */
     memos m;
     memos_new(&m);
+    ism_point_entry *pts = calloc((size_t)1 << POINT_BITS, sizeof *pts);
+    cr_assert(pts);
     const int side = 1 << LEVEL, step = 1 << (DEPTH - LEVEL);
     size_t kept = 0, wrong = 0, verdicts = 0, crease = 0;
     for (int i = 0; i < side * side * side; i++) {
@@ -104,15 +110,18 @@ static void sweep(const pf_surface *surf, int placement)
             lo[a] = ism_grid_coord(&g, a, org[a]);
             hi[a] = ism_grid_coord(&g, a, org[a] + step);
         }
+        int32_t ip[8][3];
+        for (int c = 0; c < 8; c++)
+            for (int a = 0; a < 3; a++) {
+                ip[c][a] = org[a] + ((c >> a) & 1) * step;
+                k.p[c][a] = ism_grid_coord(&g, a, ip[c][a]);
+            }
+        /* f and ∇f as the build takes them (octree_build.c node_corners): through the
+         * thread's point memo, its misses in one ism_sample_grad_batch */
+        ism_point_memo_many(pts, POINT_BITS, (const int32_t (*)[3])ip,
+                            (const double (*)[3])k.p, 8, &s, k.f, k.g, k.key);
         int seen = 0;
         for (int c = 0; c < 8; c++) {
-            int32_t ip[3];
-            for (int a = 0; a < 3; a++) {
-                ip[a] = org[a] + ((c >> a) & 1) * step;
-                k.p[c][a] = ism_grid_coord(&g, a, ip[a]);
-            }
-            k.key[c] = ism_lattice_key(ip);
-            k.f[c] = ism_eval_gradient(t, s.ws, k.p[c][0], k.p[c][1], k.p[c][2], k.g[c]);
             double v[2];
             if (ism_eval_top_values(t, s.ws, k.p[c][0], k.p[c][1], k.p[c][2], v))
                 seen |= 1 << ism_top_active_branch(t, v);
@@ -134,6 +143,7 @@ static void sweep(const pf_surface *surf, int placement)
                  placement, crease);
     cr_expect_gt(kept, 100, "%s placement %d: %zu memo gradients checked", surf->expr,
                  placement, kept);
+    free(pts);
     memos_free(&m);
     ism_ivjet_ws_free(jet);
     ism_eval_ws_free(s.ws);
@@ -172,8 +182,9 @@ static bool tie_once(const double d[3], int slope, bool *checked)
             k.p[c][a] = d[a] + (ip[a] ? h : 0);
         }
         k.key[c] = ism_lattice_key(ip);
-        k.f[c] = ism_eval_gradient(t, s.ws, k.p[c][0], k.p[c][1], k.p[c][2], k.g[c]);
     }
+    /* ∇f at the corners as the build takes them: one batch (ism_point_memo_many) */
+    ism_sample_grad_batch(&s, (const double (*)[3])k.p, k.f, k.g, 8);
     double lg[3];
     int label = ism_crease_branch(&s, k.p[0], lg);
     bool tie = k.g[0][0] == 0 && k.g[0][1] == 0 && k.g[0][2] == 0 && label >= 0 &&
