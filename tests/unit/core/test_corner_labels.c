@@ -5,7 +5,9 @@
  * gyroid in its ball (box ±1.6, depth 6), in the three placements (pf_sweep_box), the
  * corners' ∇f taken as the build takes them (ism_point_memo_many: the batch evaluator): each memo
  * gradient equals, bit for bit, the one ism_crease_branch evaluates at that corner, and each
- * node's verdict (ism_plot_test, and its blind flag) is the one it gets with no memo at all.
+ * node's verdict (ism_plot_test, and its blind flag) is the one it gets with no memo at all,
+ * and, with each corner's ∇f marked one ulp off, some distinct points keep the marked ∇f as
+ * branch 0's and some as branch 1's (copied_by_branch: the memo takes k->g on both arms).
  * And at a tie (a == b at a corner: f's derivative takes b, the label a; test_plot_test_tie.c's
  * node) the memo keeps no gradient there, or only the labelled branch's — f's (0 there) would
  * be the wrong one and would let the node pass without the certificate. */
@@ -71,6 +73,34 @@ static size_t wrong_gradients(ism_sampler *s, const ism_corners *k, const memos 
     return bad;
 }
 
+/* The corner's ∇f one ulp off in x: a memo gradient equal to it bit for bit was copied from
+ * the node's k->g (corner_branch), not evaluated (ism_crease_branch never gives it). */
+static void mark(double g[3])
+{
+    g[0] = nextafter(g[0], INFINITY);
+}
+
+/* Distinct lattice points whose memo gradient in `labels` was copied from the corners' marked
+ * ∇f (mark), by the label's branch: the entries the rule "keep ∇f where the branch wins
+ * strictly" wrote and kept (one count a point however many nodes share it). */
+static void copied_by_branch(const ism_label_entry *labels, const ism_point_entry *pts,
+                             size_t copied[2])
+{
+    for (size_t i = 0; i < (size_t)1 << ISM_LABEL_MEMO_BITS; i++) {
+        const ism_label_entry *e = &labels[i];
+        if (!e->key || !e->has_g || e->label < 0 || e->label > 1)
+            continue;
+        const ism_point_entry *pe = ism_point_find_hashed(pts, POINT_BITS, e->key,
+                                                          ism_cache_mix(e->key));
+        if (!pe)
+            continue;
+        double g[3];
+        memcpy(g, pe->g, sizeof g);
+        mark(g);
+        copied[e->label] += memcmp(g, e->g, sizeof g) == 0;
+    }
+}
+
 static ism_flatness flatness(double max_error, const double box[6])
 {
     ism_flatness fl = {.gradient_test = 0.8, .normal_cos = cos(26 * M_PI / 180),
@@ -95,8 +125,9 @@ static void sweep(const pf_surface *surf, int placement)
     double box[6];
     ism_grid g = pf_sweep_grid(base, DEPTH, placement, box);
     ism_flatness fl = flatness(2e-2, box); /* nodes of 0.2: judged by their corners */
-    memos m;
+    memos m, marked;
     memos_new(&m);
+    memos_new(&marked);
     ism_point_entry *pts = calloc((size_t)1 << POINT_BITS, sizeof *pts);
     cr_assert(pts);
     const int side = 1 << LEVEL, step = 1 << (DEPTH - LEVEL);
@@ -134,16 +165,25 @@ static void sweep(const pf_surface *surf, int placement)
         bool without = ism_plot_test(&s, jet, &fl, lo, hi, &fresh, &blind_fresh);
         verdicts += with_memo != without || blind_memo != blind_fresh;
         wrong += wrong_gradients(&s, &k, &m, &kept);
+        for (int c = 0; c < 8; c++) /* the same node, ∇f marked, into its own memo */
+            mark(fresh.g[c]);
+        fresh.memo = &marked.memo;
+        ism_plot_test(&s, jet, &fl, lo, hi, &fresh, &blind_fresh);
     }
+    size_t copied[2] = {0, 0};
+    copied_by_branch(marked.labels, pts, copied);
     cr_expect_eq(wrong, 0, "%s placement %d: %zu memo gradients not the branch's", surf->expr,
                  placement, wrong);
     cr_expect_eq(verdicts, 0, "%s placement %d: %zu nodes judged otherwise with the memo",
                  surf->expr, placement, verdicts);
     cr_expect_gt(crease, 10, "%s placement %d: %zu nodes on both branches", surf->expr,
                  placement, crease);
-    cr_expect_gt(kept, 100, "%s placement %d: %zu memo gradients checked", surf->expr,
-                 placement, kept);
+    cr_expect_gt(kept, 0, "%s placement %d: no memo gradient checked", surf->expr, placement);
+    for (int b = 0; b < 2; b++)
+        cr_expect_gt(copied[b], 0, "%s placement %d: no point's ∇f kept as branch %d's",
+                     surf->expr, placement, b);
     free(pts);
+    memos_free(&marked);
     memos_free(&m);
     ism_ivjet_ws_free(jet);
     ism_eval_ws_free(s.ws);
