@@ -9,8 +9,9 @@
  * and, with each corner's ∇f marked one ulp off, some distinct points keep the marked ∇f as
  * branch 0's and some as branch 1's (copied_by_branch: the memo takes k->g on both arms).
  * And at a tie (a == b at a corner: f's derivative takes b, the label a; test_plot_test_tie.c's
- * node) the memo keeps no gradient there, or only the labelled branch's — f's (0 there) would
- * be the wrong one and would let the node pass without the certificate. */
+ * node, and the same through a top min) the memo keeps no gradient there, or only the
+ * labelled branch's — f's (0 there) would be the wrong one and would let the node pass
+ * without the certificate. Barth's sextic is swept through a top min as well (barth_min). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -190,10 +191,18 @@ static void sweep(const pf_surface *surf, int placement)
     ism_tape_free(t);
 }
 
+/* Barth's sextic through a top min: min(-B, 2.25 - r²) = -max(B, r² - 2.25), the same zero
+ * set, so that gradient_follows' min arm (a wins where a < b) is swept too. */
+static const ism_param barth_min_phi[] = {{"phi", 1.6180339887498949}};
+static const pf_surface barth_min = {
+    "min(-(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
+    "(1 + 2*phi)*(x^2 + y^2 + z^2 - 1)^2), 2.25 - (x^2 + y^2 + z^2))",
+    barth_min_phi, 1, NULL, 0};
+
 Test(corner_labels, memo_gradients_are_the_branches_own)
 {
-    const pf_surface *surfs[] = {&pf_barth_sextic, &pf_gyroid_ball};
-    for (int sf = 0; sf < 2; sf++)
+    const pf_surface *surfs[] = {&pf_barth_sextic, &pf_gyroid_ball, &barth_min};
+    for (int sf = 0; sf < 3; sf++)
         for (int p = pf_first_box() - 1; p < 2; p++) /* own, +1e-3, irrational */
             sweep(surfs[sf], p);
 }
@@ -201,13 +210,20 @@ Test(corner_labels, memo_gradients_are_the_branches_own)
 /* test_plot_test_tie.c's node (see there) with a memo: corner 0 ties, ∇f = 0 there and the
  * labelled branch's gradient is not; the node must still fail (the certificate refuses it)
  * and the memo must not hold ∇f as the label's gradient. */
-static bool tie_once(const double d[3], int slope, bool *checked)
+static bool tie_once(const double d[3], int slope, bool is_min, bool *checked)
 {
     const double h = 0.1;
     char expr[512];
-    snprintf(expr, sizeof expr,
-             "max(0.05 - %d * (x - %.17g), 0.05 - ((x - %.17g) + (y - %.17g) + (z - %.17g))^2)",
-             slope, d[0], d[0], d[1], d[2]);
+    if (is_min) /* -max(a, b) = min(-a, -b): the same node through the min arm */
+        snprintf(expr, sizeof expr,
+                 "min(-(0.05 - %d * (x - %.17g)), "
+                 "-(0.05 - ((x - %.17g) + (y - %.17g) + (z - %.17g))^2))",
+                 slope, d[0], d[0], d[1], d[2]);
+    else
+        snprintf(expr, sizeof expr,
+                 "max(0.05 - %d * (x - %.17g), "
+                 "0.05 - ((x - %.17g) + (y - %.17g) + (z - %.17g))^2)",
+                 slope, d[0], d[0], d[1], d[2]);
     pf_surface surf = {expr, NULL, 0, NULL, 0};
     ism_tape *t = pf_compile(&surf);
     ism_sampler s = {.tape = t, .ws = ism_eval_ws_new(t), .batch = true};
@@ -257,12 +273,15 @@ static bool tie_once(const double d[3], int slope, bool *checked)
 Test(corner_labels, a_tie_keeps_the_labelled_gradient)
 {
     const double base[6] = {0, 0, 0, 1, 1, 1};
-    for (int w = pf_first_box() - 1; w < 2; w++) {
-        double box[6];
-        pf_sweep_box(base, 9, w, box);
-        bool checked = false;
-        for (int slope = 1; slope <= 6 && !tie_once(box, slope, &checked); slope++)
-            ;
-        cr_expect(checked, "box %d: no spelling put ∇f = 0 beside a labelled gradient", w);
-    }
+    for (int w = pf_first_box() - 1; w < 2; w++)
+        for (int is_min = 0; is_min < 2; is_min++) {
+            double box[6];
+            pf_sweep_box(base, 9, w, box);
+            bool checked = false; /* the operands' order on the tape depends on the
+                                   * spelling: up to 12 slopes (own box, min: 10 is the first) */
+            for (int slope = 1; slope <= 12 && !tie_once(box, slope, is_min, &checked); slope++)
+                ;
+            cr_expect(checked, "box %d %s: no spelling put ∇f = 0 beside a labelled gradient",
+                      w, is_min ? "min" : "max");
+        }
 }
