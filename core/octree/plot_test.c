@@ -15,6 +15,7 @@
 #include "core/octree/edge_roots.h"
 #include "core/octree/graph_cert.h"
 
+#include <assert.h>
 #include <math.h>
 #include <string.h>
 
@@ -163,8 +164,10 @@ static int corner_branch(ism_sampler *s, const ism_corners *k, int c)
     ism_label_entry *m = k->memo ? ism_label_slot(k->memo->labels, k->key[c]) : NULL;
     if (m && m->key == k->key[c])
         return m->label;
-    if (s->local) /* the tape at the corner is sampler.h's choice: ism_crease_branch's */
-        return ism_crease_branch(s, k->p[c], NULL);
+    /* Only the build asks (octree_build.c), whose samplers hold no local tape (only
+     * polygonise.c's leaves set one): the label is on s->tape, which is ism_crease_branch's
+     * choice there (top_tape), and every label this writes is the memo's. */
+    assert(!s->local);
     double v[2];
     s->n_point++; /* as ism_crease_branch counts the label's values */
     if (!ism_eval_top_values(s->tape, s->ws, k->p[c][0], k->p[c][1], k->p[c][2], v))
