@@ -105,7 +105,7 @@ void pf_sweep_box(const double base[6], int d, int which, double box[6])
 ism_grid pf_sweep_grid(const double base[6], int d, int which, double box[6])
 {
     pf_sweep_box(base, d, which, box);
-    ism_grid g = {d, {0, 0, 0}, {0, 0, 0}};
+    ism_grid g = {.depth = d}; /* lo and step below */
     for (int a = 0; a < 3; a++) {
         g.lo[a] = box[a];
         g.step[a] = (box[a + 3] - box[a]) / (1 << d);
