@@ -238,3 +238,54 @@ Test(emitted_errors, leaves_together_as_each_alone_in_three_placements)
     for (int b = 0; b < 3; b++)
         check_placement(offs[b], b);
 }
+
+/* Triangles with a repeated corner among others, each measured at its centroid and the sides
+ * the one before lacks (refine.c's tri_points): (a, a, c) its centroid and three sides (the
+ * first: 4); (a, c, d) its centroid, c–d and d–a (a–c the first's: 3); (a, a, d) its
+ * centroid and a–a (a, c, d has no side a–a; a–d it has: 2); (a, a, c) its centroid, a–c and
+ * c–a (a–a the one before's: 3) — 12 gradients, counted alone and together.
+ * On the plane z = 0 (f = z): every figure first order and exactly 0, no second step, no
+ * corner or search evaluated. The corners moved in x and y by PF_OFF_* and PF_IRR_*. */
+Test(emitted_errors, repeated_corner_then_shared_side)
+{
+    const pf_surface plane = {"z", NULL, 0, NULL, 0};
+    ism_tape *f = pf_compile(&plane);
+    ism_eval_ws *ws = ism_eval_ws_new(f);
+    cr_assert(f && ws);
+    const double offs[3][2] = {{0, 0}, {PF_OFF_X, PF_OFF_Y}, {PF_IRR_X * 0.1, PF_IRR_Y * 0.1}};
+    for (int b = 0; b < 3; b++) {
+        const double corner[3][2] = {{0, 0}, {0.1, 0}, {0.05, 0.1}}; /* a, c, d */
+        ism_cell_out out;
+        memset(&out, 0, sizeof out);
+        uint32_t idx[3];
+        for (int k = 0; k < 3; k++) {
+            ism_fpoint v = {{corner[k][0] + offs[b][0], corner[k][1] + offs[b][1], 0},
+                            {0, 0, 1}, 0};
+            cr_assert(ism_cell_out_vert(&out, &v, &idx[k]));
+        }
+        cr_assert(ism_cell_out_tri(&out, idx[0], idx[0], idx[1]));
+        cr_assert(ism_cell_out_tri(&out, idx[0], idx[1], idx[2]));
+        cr_assert(ism_cell_out_tri(&out, idx[0], idx[0], idx[2]));
+        cr_assert(ism_cell_out_tri(&out, idx[0], idx[0], idx[1]));
+        ism_sampler one = {.tape = f, .ws = ws, .dist_above = 1, .batch = true};
+        ism_sampler all = one;
+        double cg[4][3];
+        cr_expect_eq(ism_emitted_error_kept(&one, &out, 0, INFINITY, cg), 0, "placement %d", b);
+        cr_expect_eq(one.n_gradient, 12, "placement %d: %llu gradients alone", b,
+                     (unsigned long long)one.n_gradient);
+        ism_leaf_span span;
+        memset(&span, 0, sizeof span);
+        span.t1 = 4;
+        ism_measure_scratch w;
+        memset(&w, 0, sizeof w);
+        cr_assert(ism_emitted_errors(&all, &out, &span, 1, &w));
+        cr_expect_eq(span.err, 0, "placement %d", b);
+        cr_expect_eq(all.n_gradient, 12, "placement %d: %llu gradients together", b,
+                     (unsigned long long)all.n_gradient);
+        cr_expect_eq(one.n_point + all.n_point, 0, "placement %d: points evaluated", b);
+        ism_measure_scratch_free(&w);
+        ism_cell_out_free(&out);
+    }
+    ism_eval_ws_free(ws);
+    ism_tape_free(f);
+}
