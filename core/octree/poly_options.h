@@ -69,7 +69,8 @@ typedef struct ism_poly_options {
                                ism_node_memo), of points' crease labels in the build or the
                                leaves (sampler.h's label_memo) or of crease points
                                (crease_memo.h) and no batched gradients (a leaf's measured
-                               points: sampler.h's batch) — the same mesh bit for bit, for
+                               points: sampler.h's batch; so each leaf measured as it is
+                               polygonised, none deferred) — the same mesh bit for bit, for
                                more, and a wrong memo hit cannot hide by showing up on both
                                sides of the tests' comparison; on is for tests (default
                                off) */

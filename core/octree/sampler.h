@@ -41,10 +41,13 @@ typedef struct ism_sampler {
      * where the caller knows a singular locus (∇f vanishes on the surface there, and beside it
      * the estimate and the foot overstate), 0 elsewhere (the foot only). */
     double rays_below;
-    /* Points a caller holds together (a leaf's triangles' centroids and midpoints) are
-     * evaluated in one pass over the tape (ism_sample_grad_batch): bit for bit the values
-     * one point at a time gives (eval.h), for less. Off on the scalar reference path
-     * (poly_options.h's scalar_eval), which the tests compare with it. */
+    /* Points a caller holds together (a leaf's triangles' centroids and midpoints, or
+     * several leaves' at once, each on its own leaf's tape: refine.h's ism_emitted_errors)
+     * are evaluated in passes over each tape (ism_sample_grad_batch, _tapes): bit for bit
+     * the values one point at a time gives (eval.h), for less. It also decides a path:
+     * polygonise.c defers a leaf's measuring to measure it with the next leaves' only when
+     * batch is on. Off on the scalar reference path (poly_options.h's scalar_eval), which
+     * therefore measures leaf by leaf, and which the tests compare with it. */
     bool batch;
     /* crease_split.c: a mixed edge at most this long may take its crease point as far as a
      * thin wedge puts it (|pq| / sin w): under max_error the diagonal of a cell one level
