@@ -215,13 +215,13 @@ typedef struct phase2 {
 static void leaf_sampler(ism_cell_ctx *cx, int32_t leaf)
 {
     const ism_node *nd = &cx->tree->nodes[leaf];
-    cx->s.local = ism_leaf_tape(cx->tree, nd);
-    cx->s.local_decided = false;
+    ism_sampler_leaf l = {.local = ism_leaf_tape(cx->tree, nd), .decided = false};
     int32_t steps = ism_grid_cell_steps(&cx->tree->grid, nd->level);
     for (int a = 0; a < 3; a++) {
-        cx->s.local_box[a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a]);
-        cx->s.local_box[3 + a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a] + steps);
+        l.box[a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a]);
+        l.box[3 + a] = ism_grid_coord(&cx->tree->grid, a, nd->org[a] + steps);
     }
+    ism_sampler_leaf_set(&cx->s, &l);
 }
 
 /* Without max_error: a leaf marked ISM_NODE_UNFLAT (octree_build.c) whose emitted
@@ -349,8 +349,7 @@ static bool measure_pending(phase2 *p, padded_ctx *pc, size_t chunk, const ism_c
             p->rec[pl->i] = (ism_leaf_rec){chunk, pl->v0, sp->t0, pl->s0, pl->nverts,
                                            sp->t1 - sp->t0, pl->nsegs, err, pl->added};
     }
-    s->local = NULL;
-    s->local_decided = false;
+    ism_sampler_leaf_clear(s);
     return true;
 }
 
@@ -370,8 +369,7 @@ static bool defer_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_ce
                                                : (ism_cell_stats){0}};
         pc->pending_tris += out->ntris - t0;
     }
-    cx->s.local = NULL;
-    cx->s.local_decided = false;
+    ism_sampler_leaf_clear(&cx->s);
     if (!ok)
         return false;
     return pc->npending < PENDING_LEAVES && pc->pending_tris < PENDING_TRIANGLES
@@ -422,8 +420,7 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
         err = (float)e;
         if (ok && !p->leaf_error)
             measure_unflat(p, pc, p->leaves[i], out, t0);
-        cx->s.local = NULL;
-        cx->s.local_decided = false;
+        ism_sampler_leaf_clear(&cx->s);
         if (!ok)
             return false;
         if (p->rec)

@@ -136,6 +136,13 @@ static inline void ism_sampler_leaf_set(ism_sampler *s, const ism_sampler_leaf *
         s->local_box[k] = l->box[k];
 }
 
+/* No leaf: f's tape everywhere (whoever sets local clears local_decided). */
+static inline void ism_sampler_leaf_clear(ism_sampler *s)
+{
+    s->local = NULL;
+    s->local_decided = false;
+}
+
 /* f and ∇f at p[i] into f[i], g[i] for i < n, each through the tape ism_sample_grad would
  * use there: in batches when s->batch, else one point at a time (the same values bit for
  * bit). */
