@@ -56,18 +56,28 @@ Test(batch_identity, every_surface_lattice_and_shifted)
     }
 }
 
-/* Under an error bound the rounds take the last round's tree over (zero-free flags too). */
+/* Under an error bound the rounds take the last round's tree over (zero-free flags too).
+ * gyroid-ball (a crease cut, no known locus: the batched path defers its leaves' measuring,
+ * polygonise.c's measure_pending, the scalar one measures leaf by leaf) also in its box moved
+ * by SHIFT_CELLS of a finest cell. */
 Test(batch_identity, error_bound_rounds)
 {
     static const char *names[] = {"torus", "gyroid-ball"};
     static const double bound[] = {3e-3, 1e-2};
+    int dmax = 7 - pf_quick();
     for (size_t n = 0; n < 2; n++) {
         const test_surface *s = test_surface_named(names[n]);
         uint64_t evals[2];
-        check(s, s->box, 7 - pf_quick(), bound[n], evals);
+        check(s, s->box, dmax, bound[n], evals);
         if (n == 0) /* the torus: half its leaves are skipped as zero-free */
             cr_expect_lt(evals[1], evals[0], "torus: batched path not taken (%llu >= %llu)",
                          (unsigned long long)evals[1], (unsigned long long)evals[0]);
+        if (n == 1) {
+            double box[6], shift = SHIFT_CELLS * (s->box[3] - s->box[0]) / (1 << dmax);
+            for (int k = 0; k < 6; k++)
+                box[k] = s->box[k] + shift;
+            check(s, box, dmax, bound[n], evals);
+        }
     }
 }
 
