@@ -85,7 +85,7 @@ static bool keep_tile(void *ctx, const ism_tile *tile)
     ism_cell_ctx *cx = ctx;
     if (!ism_grow((void **)&cx->tiles, &cx->cap_tiles, cx->ntiles + 1, sizeof *cx->tiles, 32))
         return false;
-    cx->tiles[cx->ntiles++].t = *tile; /* key and hash: ism_tile_prefetch */
+    ism_node_tile_set(&cx->tiles[cx->ntiles++], tile);
     return true;
 }
 
@@ -98,8 +98,8 @@ static bool whole_face(const ism_tile *t, int32_t s)
 }
 
 /* The tiles of the node's six faces into cx->tiles, face f's from first[f] to first[f + 1],
- * each asked for from memory (ism_tile_prefetch, which also keys it) before any is walked:
- * the node's 8 corners once, the corners of finer tiles with them. */
+ * each keyed as it is kept (ism_node_tile_set) and asked for from memory (ism_tile_prefetch)
+ * before any is walked: the node's 8 corners once, the corners of finer tiles with them. */
 static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
 {
     cx->ntiles = 0;

@@ -14,14 +14,7 @@
 #include "core/octree/octree.h"
 #include "core/octree/sampler.h"
 
-/* One tile of the current node's faces with its quiet-tile key and that key's hash
- * (face_lines.c), computed once when the node's tiles are prefetched and read again when the
- * tile is walked. */
-typedef struct ism_node_tile {
-    ism_tile t;
-    ism_quiet_tile key;
-    uint64_t hash;
-} ism_node_tile;
+struct ism_node_tile; /* face_lines.h */
 
 typedef struct ism_cell_ctx {
     ism_sampler s;
@@ -62,7 +55,7 @@ typedef struct ism_cell_ctx {
     bool unregistered;        /* set by ism_tile_lines when a tile's side met a lattice point
                                  the registry lacks (it then returns false: ISM_POLY_INTERNAL,
                                  not out of memory) */
-    ism_node_tile *tiles;     /* the current node's tiles, face by face */
+    struct ism_node_tile *tiles; /* the current node's tiles, face by face */
     size_t ntiles, cap_tiles;
     ism_tile *zero;           /* the current node's tiles lying in f = 0 */
     size_t nzero, cap_zero;

@@ -1148,10 +1148,15 @@ void ism_lattice_prefetch(ism_cell_ctx *cx, const int32_t ip[3])
     __builtin_prefetch(ism_breaks_slot(cx->breaks, h));
 }
 
-void ism_tile_prefetch(ism_cell_ctx *cx, ism_node_tile *nt, bool corners)
+void ism_node_tile_set(ism_node_tile *nt, const ism_tile *t)
 {
-    nt->key = quiet_key(&nt->t);
+    nt->t = *t;
+    nt->key = quiet_key(t);
     nt->hash = tile_hash(&nt->key);
+}
+
+void ism_tile_prefetch(ism_cell_ctx *cx, const ism_node_tile *nt, bool corners)
+{
     __builtin_prefetch(quiet_slot(cx, nt->hash), 0);
     __builtin_prefetch(memo_slot(cx, nt->hash), 0);
     if (!corners)

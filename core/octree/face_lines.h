@@ -14,15 +14,27 @@ bool ism_flines_push(ism_flines *l, const ism_fpoint *a, const ism_fpoint *b, in
  * a memo miss probes). Changes nothing. */
 void ism_lattice_prefetch(ism_cell_ctx *cx, const int32_t ip[3]);
 
+/* One tile of the current node's faces with its quiet-tile key and that key's hash, set
+ * together by ism_node_tile_set where the tile is kept, and read by ism_tile_prefetch and
+ * ism_tile_lines (the key and hash computed once a tile, not again at the walk). */
+typedef struct ism_node_tile {
+    ism_tile t;
+    ism_quiet_tile key;
+    uint64_t hash;
+} ism_node_tile;
+
+/* Sets nt to tile t with its key and hash. */
+void ism_node_tile_set(ism_node_tile *nt, const ism_tile *t);
+
 /* Asks the memory for what ism_tile_lines will read first about tile nt->t (its quiet-tile
  * memo slot, the first cache line of its crossed-tile memo slot, and with `corners` its
  * corners as ism_lattice_prefetch: a caller that asked for them already, as a node's own
  * corners, passes false): the node's tiles are prefetched together, so that these misses
- * overlap. Sets nt->key and nt->hash, which ism_tile_lines reads; changes nothing else. */
-void ism_tile_prefetch(ism_cell_ctx *cx, ism_node_tile *nt, bool corners);
+ * overlap. Changes nothing. */
+void ism_tile_prefetch(ism_cell_ctx *cx, const ism_node_tile *nt, bool corners);
 
-/* Appends to cx->lines the lines of f = 0 on one tile nt->t (a face or part of a face; its
- * key and hash set by ism_tile_prefetch): walked, or copied from the thread's memo of tiles
+/* Appends to cx->lines the lines of f = 0 on one tile nt->t (a face or part of a face, set
+ * by ism_node_tile_set): walked, or copied from the thread's memo of tiles
  * walked in the round (cell_cache.h; unless cx->walk_every_tile). When f vanishes on the
  * whole tile (a plane of the surface lying in the lattice), sets cx->zero_tile, leaves cx->bp
  * holding its boundary and adds no lines. */
