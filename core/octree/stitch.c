@@ -21,9 +21,9 @@
 /* A node has a handful of lines (a plain polygon: 3 to 6, 2 ends each; a few more where
  * sheets cross), so its line ends are few. Up to FEW_ENDS ends the graph lives on
  * ism_stitch's stack (no allocation per leaf) and the ends are grouped by their points
- * without a sort (grouped_ends); more ends are allocated and qsorted. The
- * Klein bottle at E = 3.27e-3 stitches 39,768 leaves, none with more (callgrind line
- * counts of the allocating branch). */
+ * without a sort (grouped_ends; a NaN coordinate is sorted, by insertion, as before); more
+ * ends are allocated and qsorted. The Klein bottle at E = 3.27e-3 stitches 39,768 leaves,
+ * none with more (callgrind line counts of the allocating branch). */
 #define FEW_ENDS 32
 
 typedef struct end_ref {
@@ -77,10 +77,10 @@ static double far_agreement(const ism_flines *l, int e1, int e2)
 
 /* Pairs the single-polygon ends meeting at a point without shared lines (group[0 .. n), in
  * ascending order): each end, in order, with the later unpaired end whose far gradient
- * agrees most. Any number of ends (an
- * end is unpaired while its partner is -1, as build_graph set it; it used to stop at 64 ends,
- * which a node never reaches: at most 3 faces x 4 tiles meet at a point, each tile giving it
- * at most 2 lines). An end left without a partner starts an open chain. */
+ * agrees most. Any number of ends (an end is unpaired while its partner is -1, as
+ * build_graph set it; it used to stop at 64 ends, which a node never reaches: at most 3
+ * faces x 4 tiles meet at a point, each tile giving it at most 2 lines). An end left
+ * without a partner starts an open chain. */
 static void pair_point(graph *g, const int *group, int n)
 {
     for (int i = 0; i < n; i++) {
@@ -138,13 +138,12 @@ static bool has_nan(const double p[3])
 }
 
 /* The few ends (ne ≤ FEW_ENDS) into order[0 .. ne), their points into at[0 .. ne), by the
- * points' values, ends ascending
- * among equal values: the points in the order each first appears, where cmp_end's sort puts
- * them in coordinate order. Only where the ends meet is read (build_graph groups the ends of
- * one point, and what a group does never depends on the others'), and a group's ends keep
- * cmp_end's order, -0 and 0 interleaved by end as it leaves them. False when a coordinate is
- * NaN (cmp_end's order is then no order, and what the sort leaves depends on how it sorts):
- * the caller sorts, as before. */
+ * points' values, ends ascending among equal values: the points in the order each first
+ * appears, where cmp_end's sort puts them in coordinate order. Only where the ends meet is
+ * read (build_graph groups the ends of one point, and what a group does never depends on
+ * the others'), and a group's ends keep cmp_end's order, -0 and 0 interleaved by end as it
+ * leaves them. False when a coordinate is NaN (cmp_end's order is then no order, and what
+ * the sort leaves depends on how it sorts): the caller sorts, as before. */
 static bool grouped_ends(const ism_flines *l, size_t ne, int *order, const ism_fpoint **at)
 {
     const ism_fpoint *ep[FEW_ENDS];

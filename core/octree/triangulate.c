@@ -117,7 +117,7 @@ static double corner_vote(ism_sampler *s, const double node[6], const double c[3
     return isfinite(sum) ? sum : 0;
 }
 
-/* Is the polygon wound against ∇f? (units not NULL: each point's unit gradient left there.) Its Newell normal against the mean unit gradient at its
+/* Is the polygon wound against ∇f? Its Newell normal against the mean unit gradient at its
  * points — unless the points split the vote (some gradients face the normal, others face
  * away: a polygon across a sharp CSG crease, such as the chord of cube-minus-ball's 40°
  * wedge between the ball and a face, two points on the ball and one on the face, whose mean
@@ -130,7 +130,8 @@ static double corner_vote(ism_sampler *s, const double node[6], const double c[3
  * nothing of one polygon (their sum is then 0 and the mean is kept), yet on all 42 presets
  * of the gallery, singular ones included, in their own box and moved by 1e-3, 0.37, √2 − 1
  * and 0.6 of a cell, they wind no edge against its neighbour, where the mean alone wound
- * 12 / 14 / 33 of the horn's in the last three. */
+ * 12 / 14 / 33 of the horn's in the last three. With `units` not NULL, each point's unit
+ * gradient is left in units[i] for the caller's fans to read again. */
 static bool reversed(ism_sampler *s, const double node[6], const ism_fpoint *p, size_t n,
                      unit_g *units)
 {
