@@ -21,9 +21,9 @@
 /* A node has a handful of lines (a plain polygon: 3 to 6, 2 ends each; a few more where
  * sheets cross), so its line ends are few. Up to FEW_ENDS ends the graph lives on
  * ism_stitch's stack (no allocation per leaf) and the ends are grouped by their points
- * without a sort (grouped_ends; a NaN coordinate is sorted, by insertion, as before); more
- * ends are allocated and qsorted. The Klein bottle at E = 3.27e-3 stitches 39,768 leaves,
- * none with more (callgrind line counts of the allocating branch). */
+ * without a sort (grouped_ends; a NaN coordinate is sorted, as more ends are); more ends
+ * are allocated and qsorted. The Klein bottle at E = 3.27e-3 stitches 39,768 leaves, none
+ * with more (callgrind line counts of the allocating branch). */
 #define FEW_ENDS 32
 
 typedef struct end_ref {
@@ -43,14 +43,34 @@ typedef struct graph {
     bool terminal_in[FEW_ENDS], used_in[FEW_ENDS / 2];
 } graph;
 
+/* Coordinates by value (-0 equal to 0), NaN after every number and NaNs by their bits: a
+ * total order, which qsort needs (NaN compared by value alone is neither below, above nor
+ * equal, and a sort given such an order may leave anything), and in which ends whose
+ * points are the same bits are always equal. */
+static int cmp_coord(double a, double b)
+{
+    if (a < b)
+        return -1;
+    if (a > b)
+        return 1;
+    if (a == b)
+        return 0;
+    bool na = a != a, nb = b != b;
+    if (na != nb)
+        return na ? 1 : -1;
+    uint64_t ua, ub;
+    memcpy(&ua, &a, sizeof ua);
+    memcpy(&ub, &b, sizeof ub);
+    return (ua > ub) - (ua < ub);
+}
+
 static int cmp_end(const void *x, const void *y)
 {
     const end_ref *a = x, *b = y;
     for (int k = 0; k < 3; k++) {
-        if (a->p[k] < b->p[k])
-            return -1;
-        if (a->p[k] > b->p[k])
-            return 1;
+        int c = cmp_coord(a->p[k], b->p[k]);
+        if (c)
+            return c;
     }
     return (a->end > b->end) - (a->end < b->end);
 }
@@ -105,7 +125,8 @@ static void pair_point(graph *g, const int *group, int n)
 }
 
 /* The ends sorted by cmp_end (points compared by value, -0 equal to 0, then by end) into
- * order[0 .. ne): up to FEW_ENDS by insertion on the stack, more by qsort. */
+ * order[0 .. ne); up to FEW_ENDS sorted on the stack. cmp_end is a total order and no two
+ * ends are equal in it, so the sorted order is the one any sort leaves. */
 static bool sorted_ends(const ism_flines *l, size_t ne, int *order)
 {
     end_ref refs_in[FEW_ENDS], *refs = refs_in;
@@ -115,16 +136,7 @@ static bool sorted_ends(const ism_flines *l, size_t ne, int *order)
         memcpy(refs[e].p, end_point(l, (int)e)->p, sizeof refs[e].p);
         refs[e].end = (int)e;
     }
-    if (ne <= FEW_ENDS) {
-        for (size_t i = 1; i < ne; i++)
-            for (size_t j = i; j > 0 && cmp_end(&refs[j - 1], &refs[j]) > 0; j--) {
-                end_ref t = refs[j];
-                refs[j] = refs[j - 1];
-                refs[j - 1] = t;
-            }
-    } else {
-        qsort(refs, ne, sizeof *refs, cmp_end);
-    }
+    qsort(refs, ne, sizeof *refs, cmp_end);
     for (size_t e = 0; e < ne; e++)
         order[e] = refs[e].end;
     if (refs != refs_in)
@@ -142,8 +154,8 @@ static bool has_nan(const double p[3])
  * appears, where cmp_end's sort puts them in coordinate order. Only where the ends meet is
  * read (build_graph groups the ends of one point, and what a group does never depends on
  * the others'), and a group's ends keep cmp_end's order, -0 and 0 interleaved by end as it
- * leaves them. False when a coordinate is NaN (cmp_end's order is then no order, and what
- * the sort leaves depends on how it sorts): the caller sorts, as before. */
+ * leaves them. False when a coordinate is NaN (equal to nothing by value, where cmp_end
+ * groups NaNs by their bits): the caller sorts. */
 static bool grouped_ends(const ism_flines *l, size_t ne, int *order, const ism_fpoint **at)
 {
     const ism_fpoint *ep[FEW_ENDS];

@@ -5,7 +5,7 @@
  * sheets closed through copies of one shared (double) line, each below and above 32 ends.
  * Each loop must be closed, hold the expected number of points, and step only along given
  * lines. Then where ends meet: a corner written 0 and -0 (alone, and interleaved in end
- * order at a corner of two triangles), each on the
+ * order at a corner of two triangles), and a corner with a NaN coordinate, each on the
  * stack's graph and the heap's. */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -304,3 +304,29 @@ Test(stitch, signed_zero_interleaved_at_a_corner)
                       "the stack's and heap's chains differ: T%d at %d", t + 1, i);
 }
 
+/* A triangle whose corner A is (NaN, 0, 0), written alike by both its lines: a NaN equals
+ * nothing by value, yet the two ends are the same bits, so they meet and the triangle
+ * closes (3 points), on the stack's graph (alone: 6 ends; the sort's old insertion order
+ * left them apart, an open chain of 4) and the heap's (beside 5 triangles: 36 ends; qsort
+ * was given no order there). */
+Test(stitch, nan_point_meets_its_bits)
+{
+    for (int k = 0; k <= 5; k += 5) {
+        ism_fpoint a = fpoint(NAN, 0, 0, NZ), b = fpoint(1, 0, 0, NZ), c = fpoint(0, 1, 0, NZ);
+        lineset s = { .v = { { a, b, 0 }, { b, c, 0 }, { c, a, 0 } }, .n = 3 };
+        for (size_t i = 0; i < s.n; i++)
+            s.v[i].kind = ISM_LINE_REGULAR;
+        ism_flines l = with_triangles(&s, k);
+        ism_loops out = { 0 };
+        cr_assert(ism_stitch(&l, &out), "k %d", k);
+        cr_assert_eq(others(&out, k, "NaN"), 1u, "k %d: %zu loops", k, out.nloops);
+        for (size_t i = 0; i < out.nloops; i++) {
+            const ism_loop *lp = &out.loops[i];
+            if (out.pts[lp->first].g[0] == 1)
+                continue;
+            cr_expect(lp->closed, "k %d: the NaN triangle open", k);
+            cr_expect_eq(lp->n, 3u, "k %d: the NaN triangle has %zu points", k, lp->n);
+        }
+        ism_loops_free(&out);
+    }
+}
