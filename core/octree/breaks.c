@@ -5,14 +5,16 @@
  *
  * Built on several threads: every step is a loop over equal blocks of an array (ism_parallel_
  * for), with prefix sums over the blocks between loops — the corners gathered per block of
- * nodes (less those a small filter saw among the block's recent leaves), an LSD radix sort whose passes count and scatter per block (stable, so the order
- * is the one a single thread makes), duplicates dropped per block, and the table filled with
- * compare-and-swap on empty slots. The table's contents do not depend on the thread count;
- * where a point lands in its probe run may, which no query can see.
+ * nodes (less those a small filter saw among the block's recent leaves), an LSD radix sort
+ * whose passes count and scatter per block (stable, so the order is the one a single thread
+ * makes), duplicates dropped per block, and the table filled with compare-and-swap on empty
+ * slots. The table's contents do not depend on the thread count; where a point lands in
+ * its probe run may, which no query can see. The keys' layout: lattice_pack.h.
  *
  * A later max_error round polygonises only the leaves near its splits (leaf_memo.h) and
  * registers only the leaves near those (breaks_near.h). */
 #include "core/octree/breaks.h"
+#include "core/octree/lattice_pack.h"
 #include "core/util/zeroed.h"
 
 #include <stdlib.h>
@@ -35,38 +37,13 @@
 /* Below this many corners one block does all (a loop's threads cost more than they save). */
 #define MIN_PARALLEL_CORNERS (1u << 15)
 
-/* Sort keys of lattice points, line by line along `axis`: the two other coordinates, then
- * the coordinate along the axis, each shifted right by `shift` (every corner is a multiple
- * of the finest leaf's size) into cb bits. */
-typedef struct packing {
-    int shift, cb;
-} packing;
-
-static uint64_t pack(const packing *k, int axis, const int32_t p[3])
-{
-    int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    return ((uint64_t)(p[u] >> k->shift) << 2 * k->cb) |
-           ((uint64_t)(p[v] >> k->shift) << k->cb) | (uint64_t)(p[axis] >> k->shift);
-}
-
-static void unpack(const packing *k, int axis, uint64_t key, int32_t p[3])
-{
-    int u = (axis + 1) % 3, v = (axis + 2) % 3;
-    uint64_t m = ((uint64_t)1 << k->cb) - 1;
-    p[u] = (int32_t)(key >> 2 * k->cb) << k->shift;
-    p[v] = (int32_t)((key >> k->cb) & m) << k->shift;
-    p[axis] = (int32_t)(key & m) << k->shift;
-}
-
-static uint64_t line_of(const packing *k, uint64_t key) { return key >> k->cb; }
-
 /* The coordinate along the key's axis of the point after key i of a sorted array a of n,
  * when it lies on the same line; else ISM_BREAK_NONE. */
-static int32_t successor(const packing *k, const uint64_t *a, size_t n, size_t i)
+static int32_t successor(const ism_packing *k, const uint64_t *a, size_t n, size_t i)
 {
-    if (i + 1 >= n || line_of(k, a[i]) != line_of(k, a[i + 1]))
+    if (i + 1 >= n || ism_pack_line(k, a[i]) != ism_pack_line(k, a[i + 1]))
         return ISM_BREAK_NONE;
-    return (int32_t)(a[i + 1] & (((uint64_t)1 << k->cb) - 1)) << k->shift;
+    return ism_pack_along(k, a[i + 1]);
 }
 
 /* The build: its arrays, and the split of the current one into blocks. */
@@ -74,7 +51,7 @@ typedef struct builder {
     const ism_octree *t;
     const uint8_t *take;      /* per node: register its corners; NULL: every leaf's */
     ism_breaks *b;
-    packing pk;
+    ism_packing pk;
     ism_pool *pool;
     int threads;
     ism_par_cost *cost;
@@ -144,7 +121,7 @@ static void gather_corners(void *ctx, size_t blk, int thread)
     builder *w = ctx;
     const ism_grid *g = &w->t->grid;
     const ism_node *nodes = w->t->nodes;
-    const packing pk = w->pk;
+    const ism_packing pk = w->pk;
     uint64_t *first = w->tk + 8 * w->per_block[blk], *k = first;
     uint64_t seen[1u << CORNER_FILTER_BITS]; /* key + 1, 0: empty */
     memset(seen, 0, sizeof seen);
@@ -156,11 +133,12 @@ static void gather_corners(void *ctx, size_t blk, int thread)
         /* corner c's key is the origin's plus the leaf's size in each field c moves along:
          * the origin and the size are multiples of 1 << pk.shift (the finest leaf's size),
          * and a field's sum stays within its cb bits (coordinates 0 .. 2^finest), so the
-         * sum is pack() of the corner */
+         * sum is ism_pack() of the corner */
         uint64_t ds = (uint64_t)(ism_grid_cell_steps(g, nd->level) >> pk.shift);
-        uint64_t k0 = pack(&pk, 2, nd->org), dx = ds << 2 * pk.cb, dy = ds << pk.cb;
+        uint64_t k0 = ism_pack(&pk, 2, nd->org), dx = ds << ism_pack_shift(&pk, 2, 0),
+                 dy = ds << ism_pack_shift(&pk, 2, 1), dz = ds << ism_pack_shift(&pk, 2, 2);
         for (int c = 0; c < 8; c++) {
-            uint64_t key = k0 + (c & 1 ? dx : 0) + (c & 2 ? dy : 0) + (c & 4 ? ds : 0);
+            uint64_t key = k0 + (c & 1 ? dx : 0) + (c & 2 ? dy : 0) + (c & 4 ? dz : 0);
             uint64_t *slot = &seen[ism_cache_mix(key) & ((1u << CORNER_FILTER_BITS) - 1)];
             if (*slot == key + 1)
                 continue;
@@ -291,19 +269,14 @@ static void rekey(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     builder *w = ctx;
-    const packing pk = w->pk;
+    const ism_packing pk = w->pk;
     const uint64_t *k = w->k;
     uint64_t *ak = w->ak;
     uint32_t *idx = w->idx;
     int axis = w->axis;
     range r = block(w, blk);
-    /* pack(axis) of a point is its pack(2) with the three cb-bit fields rotated left by
-     * (axis + 1) fields: (x, y, z) -> (y, z, x) along x, (z, x, y) along y (3 cb ≤ 60 bits:
-     * cb = finest + 1 ≤ ISM_GRID_MAX_DEPTH + 1) */
-    int rot = (axis + 1) * pk.cb, width = 3 * pk.cb;
-    uint64_t mask = ((uint64_t)1 << width) - 1;
     for (size_t i = r.lo; i < r.hi; i++) {
-        ak[i] = ((k[i] << rot) & mask) | k[i] >> (width - rot);
+        ak[i] = ism_repack(&pk, axis, k[i]);
         idx[i] = (uint32_t)i;
     }
 }
@@ -312,7 +285,7 @@ static void link_block(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     builder *w = ctx;
-    const packing pk = w->pk;
+    const ism_packing pk = w->pk;
     const uint64_t *ak = w->ak;
     const uint32_t *idx = w->idx;
     int32_t *next = w->next[w->axis];
@@ -354,7 +327,7 @@ static void fill_block(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     builder *w = ctx;
-    const packing pk = w->pk;
+    const ism_packing pk = w->pk;
     const uint64_t *k = w->k;
     const int32_t *nx = w->next[0], *ny = w->next[1];
     ism_breaks *b = w->b;
@@ -363,10 +336,10 @@ static void fill_block(void *ctx, size_t blk, int thread)
     for (size_t i = r.lo; i < r.hi; i++) {
         int32_t p[3];
         if (i + LOOKAHEAD < r.hi) {
-            unpack(&pk, 2, k[i + LOOKAHEAD], p);
+            ism_unpack(&pk, 2, k[i + LOOKAHEAD], p);
             ism_breaks_prefetch(b, p);
         }
-        unpack(&pk, 2, k[i], p);
+        ism_unpack(&pk, 2, k[i], p);
         ism_break_point *e = insert(b, p);
         e->next[0] = nx[i];
         e->next[1] = ny[i];
@@ -407,7 +380,7 @@ static bool distinct_corners(builder *w, size_t *out)
     int finest = 0;
     for (size_t blk = 0; blk < w->nblocks; blk++)
         finest = w->finest[blk] > finest ? w->finest[blk] : finest;
-    w->pk = (packing){t->grid.depth - finest, finest + 1}; /* coordinates 0 .. 2^finest */
+    w->pk = (ism_packing){t->grid.depth - finest, finest + 1}; /* coordinates 0 .. 2^finest */
     size_t n = 8 * ism_counts_to_offsets(w->per_block, w->nblocks), room = n ? n : 1;
     if (!(w->k = malloc(room * sizeof *w->k)) || !(w->tk = malloc(room * sizeof *w->tk)))
         return false;
