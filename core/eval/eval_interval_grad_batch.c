@@ -29,6 +29,7 @@
 #include "core/eval/avx2_clone.h"
 #include "core/eval/interval_jet_ws.h"
 #include "core/eval/interval_lanes.h"
+#include "core/eval/workspace.h"
 #include "core/expr/tape.h"
 #include "core/util/cache_line.h"
 
@@ -159,13 +160,6 @@ INLINE v4i branch(vj *o, const ism_instr *in, const vj *r, unsigned w)
     return free;
 }
 
-/* The op of a min, max or abs (its lanes' kinks are listed). */
-static inline bool is_branch(int op)
-{
-    return op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR ||
-           op == ISM_OP_MAX_RC || op == ISM_OP_ABS;
-}
-
 /* One instruction of the gradient pass (jet_op with second = 0), on registers r, in jet_op's
  * order of reads and writes (an output register may be an operand's). Returns the lanes
  * where it is a free kink (only min, max and abs have any). */
@@ -261,7 +255,7 @@ INLINE void run_group(const ism_tape *t, vj *r, vj *keep, ism_ivjet_ws *ws, uint
         v4i free = step(in, r, w, branches);
         if (!branches) /* a constant in each copy: records only without kinks */
             keep[i * ISM_IVG_GROUPS] = r[in->out];
-        if (!branches || !is_branch(in->op))
+        if (!branches || !ism_op_is_kink(in->op))
             continue;
         unsigned m = 0;
         _Pragma("GCC unroll 4") for (int j = 0; j < VL; j++)
@@ -328,7 +322,7 @@ static bool lanes_take(const ism_tape *t, bool *branches)
         return true;
     for (size_t i = 0; i < t->len; i++) {
         int op = t->code[i].op;
-        if (is_branch(op))
+        if (ism_op_is_kink(op))
             *branches = true;
         else if (!ism_ivjet_hess_from_kept(op))
             return false;

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "core/eval/interval_jet.h"
+#include "core/eval/workspace.h"
 #include "core/expr/tape.h"
 #include "test_eval_surfaces.h"
 
@@ -96,10 +97,7 @@ static void batch_against_scalar(const char *name, const ism_tape *t, const ism_
         s->free_kinks += count;
         s->tops += top_s;
         for (size_t i = 0; i < len; i++) {
-            int op = t->code[i].op;
-            bool branch = op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR ||
-                          op == ISM_OP_MAX_RC || op == ISM_OP_ABS;
-            s->decided += branch && !ks[i];
+            s->decided += ism_op_is_kink(t->code[i].op) && !ks[i];
         }
         for (int c = 0; c < 3; c++)
             s->whole += g.d[c].lo == -INFINITY && g.d[c].hi == INFINITY;
