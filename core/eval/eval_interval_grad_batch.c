@@ -14,9 +14,11 @@
  * min, max and abs are taken as ism_eval_interval_grad takes them with no branch forced
  * (eval_interval_jet.c's op_branch), lane by lane: the value the natural enclosure, the
  * partials those of the branch the lane's box decides, or at a free kink (both branches
- * allowed) the whole line but in the variables neither operand depends on; each lane's free
- * kinks are kept in the workspace (ism_ivjet_lane_kinks) as that pass would list them. Tapes
- * with these give no records (hess_only takes none of them).
+ * allowed) the whole line but 0 where both operands' partials are exactly [0, 0] over the
+ * lane's box (or the variable is outside the want: set_whole_derivs' test, not dependence:
+ * x² over x = [0, 0] depends on x, its partial is 0); each lane's free kinks are kept in the
+ * workspace (ism_ivjet_lane_kinks) as that pass would list them. Tapes with these give no
+ * records (hess_only takes none of them).
  *
  * Why: the dual mesher takes f and ∇f's natural enclosure over most children of a split
  * node (octree/dual_classify.c, ism_dual_classify_tail); one box costs ~1,700 instructions
@@ -111,7 +113,8 @@ INLINE vi ivwhole(void) { return (vi){splat(-INFINITY), splat(INFINITY)}; }
  * the value iv_min / iv_max / iv_abs; decided_branch's strict tests (a NaN bound decides
  * nothing); a decided lane takes the branch's partials (take_derivs; abs: +a' or, as
  * each(lin_neg) does, −a' but where a' is exactly 0, kept as it is), a free one
- * set_whole_derivs' (0 in a variable neither operand depends on, else the whole line).
+ * set_whole_derivs' (0 where both operands' partials are exactly [0, 0] over the lane's
+ * box, or the variable is outside w; else the whole line).
  * Returns the free lanes. */
 INLINE v4i branch(vj *o, const ism_instr *in, const vj *r, unsigned w)
 {

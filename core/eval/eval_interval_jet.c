@@ -133,8 +133,8 @@ static ALWAYS_INLINE ism_interval subz(ism_interval a, ism_interval b)
 }
 
 /* Whole-line derivatives of a result of a and b that is not differentiable in the box (a
- * kink, a pole), except in the variables on which neither a nor b depends (derivatives
- * exactly 0): there the result does not change either. */
+ * kink, a pole), except where both a's and b's derivatives are exactly [0, 0] over the box
+ * (or not wanted): there the result does not change either. */
 static void set_whole_derivs(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, unsigned w)
 {
     bool flat[3];
