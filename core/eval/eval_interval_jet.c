@@ -956,13 +956,6 @@ size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_inte
     return run_jet(t, ws, box, force, kinks, out);
 }
 
-/* The forced pass differs from the unforced one only at the forced instruction (the ones
- * before it read their force byte only at a kink, and it is free only there), and there
- * op_branch keeps the natural enclosure as the value and copies the branch's partials
- * (take_derivs; sanitize then changes nothing): what the unforced pass left in the operands'
- * registers, when t ends there and nothing overwrote them. No bound read can be NaN: the pass
- * sanitized every register it wrote, and kept the partials outside an instruction's want at
- * 0, so no test for one here. */
 /* The lane of the last batched pass of t on ws whose box is box, or -1. */
 static int pass_lane(const ism_ivjet_ws *ws, const ism_tape *t, const ism_interval box[3])
 {
@@ -1001,6 +994,15 @@ static ism_ivjet lane_reg(const ism_ivjet_ws *ws, int k, uint32_t reg)
     return r;
 }
 
+/* The forced pass differs from the unforced one only at the forced instruction (the ones
+ * before it read their force byte only at a kink, and it is free only there), and there
+ * op_branch keeps the natural enclosure as the value and copies the branch's partials
+ * (take_derivs; sanitize then changes nothing): what the unforced pass left in the operands'
+ * registers, when t ends there and nothing overwrote them (or a batched pass's lane of them:
+ * bit for bit the same, eval_interval_grad_batch.c). No bound read can be NaN: the pass, scalar
+ * or batched (whose lanes turn NaN bounds into infinities as sanitize does), sanitized every
+ * register it wrote, and kept the partials outside an instruction's want at 0, so no test
+ * for one here. */
 bool ism_ivjet_top_pieces(const ism_tape *t, const ism_ivjet_ws *ws, const ism_interval box[3],
                           ism_ivgrad piece[2])
 {
