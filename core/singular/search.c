@@ -888,18 +888,20 @@ static void finish(search *s, worker *w, task_out *out, scell *c, const ism_inte
 }
 
 /* The children of expand_cell that classify will take the interval gradient of (left OPEN
- * by screen and not dropped by the centre test; fc[m]: f at child m's centre, or NULL), at
- * most ISM_IVGRAD_BATCH / 2 of them, in order: their gradients over their boxes and at their
- * centres (smooth_tests' centre_at, taken for every such child: the box's may exclude 0,
- * and then the centre's is not used) in one ism_eval_interval_grad_lanes, bit for bit the
- * one-by-one passes (classify's kept pass; centre_at's), into pre[m]; the jets smooth_tests
- * then takes over the boxes take the batch's records as they took the kept pass's. On the
- * torus 2 such children a parent on average, 4 lanes: cheaper than one by one from 2 lanes
- * up (interval_jet.h, ISM_IVGRAD_BATCH's figures). With min, max or abs the lanes list
- * each box's kinks as classify's pass would (ism_eval_interval_grad_lanes). Without centres
- * (a parent without a model: no centre test), up to ISM_IVGRAD_BATCH boxes alone, their
- * centres left to centre_at: few of those children reach smooth_tests (Barth at E 0.0259:
- * with the centres 1,287.5M instructions, without 1,273.1M, one by one 1,284.2M). */
+ * by screen and not dropped by the centre test; fc[m]: f at child m's centre, or NULL), in
+ * order: with centres, at most ISM_IVGRAD_BATCH / 2 of them, their gradients over their
+ * boxes and at their centres (smooth_tests' centre_at, taken for every such child: the box's
+ * may exclude 0, and then the centre's is not used); without, at most ISM_IVGRAD_BATCH, over
+ * their boxes only. In one ism_eval_interval_grad_lanes (or _batch without kinks), bit for
+ * bit the one-by-one passes (classify's kept pass; centre_at's), into pre[m]; the jets
+ * smooth_tests then takes over the boxes take the batch's records as they took the kept
+ * pass's. On the torus 2 such children a parent on average, 4 lanes: cheaper than one by
+ * one from 2 lanes up (interval_jet.h, ISM_IVGRAD_BATCH's figures). With min, max or abs the
+ * lanes list each box's kinks as classify's pass would (ism_eval_interval_grad_lanes).
+ * Without centres (a parent without a model: no centre test; only on tapes with kinks) the
+ * children's centres are left to centre_at: few of those children reach smooth_tests (Barth
+ * at E 0.0259: with the centres 1,287.5M instructions, without 1,273.1M, one by one
+ * 1,284.2M). */
 static void pre_gradients(const search *s, worker *w, const int v[8], const ism_interval *bx,
                           const ism_interval *by, const ism_interval *bz,
                           const ism_interval *const fc[8], ism_interval q, bool centres,
@@ -911,7 +913,9 @@ static void pre_gradients(const search *s, worker *w, const int v[8], const ism_
     size_t n = 0, most = centres ? ISM_IVGRAD_BATCH / 2 : ISM_IVGRAD_BATCH;
     for (int m = 0; m < 8; m++)
         pre[m].ok = false;
-    if (!s->batch)
+    /* without centres only with kinks: on smooth tapes the torus's search paid more for
+     * those batches than one by one (expand_cell) */
+    if (!s->batch || (!centres && !s->branches))
         return;
     for (int m = 0; m < 8 && n < most; m++)
         if (v[m] == OPEN && !centre_drops(fc[m], q))
@@ -979,8 +983,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
             ism_interval x[3] = { bx[m], by[m], bz[m] };
             v[m] = screen(w, &kids[m], x, f[m], NULL, 0);
         }
-        pre_gradients(s, w, s->branches ? v : (const int[8]){ 0 }, bx, by, bz, none,
-                      iv(0.0, 0.0), false, pre);
+        pre_gradients(s, w, v, bx, by, bz, none, iv(0.0, 0.0), false, pre);
         for (int m = 0; m < 8; m++) {
             ism_interval x[3] = { bx[m], by[m], bz[m] };
             finish(s, w, out, &kids[m], x, f[m], v[m], NULL, iv(0.0, 0.0), &km, &pre[m]);
