@@ -151,35 +151,60 @@ Test(ivgrad_lanes, kinks_in_lanes_change_no_bit)
 
 /* After a batch of a tape with kinks the jets over its boxes are fresh second-order passes
  * (no record: hess_only takes no min, max or abs), and the lanes' kinks and pieces are gone
- * once another batch (of other boxes) runs. */
+ * once another batch (of other boxes, or ism_eval_interval_grad_batch of another tape on the
+ * same workspace) runs; a call refused before it starts (a tape with sin; no box; more than
+ * ISM_IVGRAD_BATCH boxes) leaves the last pass standing. */
 Test(ivgrad_lanes, no_record_and_no_stale_lane)
 {
     ism_tape *t = compile("max(x^2 + y^2 - 1, z) + abs(x - y)");
     ism_ivjet_ws *plain = ism_ivjet_ws_new(t), *lanes = ism_ivjet_ws_new(t);
     cr_assert(plain && lanes);
+    size_t len = ism_tape_length(t);
     const ism_interval b[2][3] = { { { 0, 1 }, { 0.5, 1 }, { -0.5, 0.5 } },
                                    { { -1, 0 }, { -1, -0.5 }, { 1, 2 } } };
-    ism_ivgrad G[2];
+    ism_ivgrad G[ISM_IVGRAD_BATCH + 1];
     uint32_t nk[2];
     cr_assert(ism_eval_interval_grad_lanes(t, lanes, b, 2, G, nk));
     cr_assert(nk[0] > 0, "box 0 holds a free kink");
+    uint8_t k1[len], k2[len], kinks[len];
+    /* the scalar pass's kinks over box 0, to compare the lane's with */
+    cr_assert_eq(ism_eval_interval_grad(t, plain, b[0], NULL, k1, &G[2]), nk[0]);
+    /* refused before it starts: the pass over b stands (lanes_take, can_run's n checks) */
+    ism_tape *s = compile("max(sin(x), y)");
+    const ism_interval many[ISM_IVGRAD_BATCH + 1][3] = { { { 0, 1 }, { 0, 1 }, { 0, 1 } } };
+    cr_assert(!ism_eval_interval_grad_lanes(s, lanes, b, 1, G, NULL), "sin is not taken");
+    cr_assert(!ism_eval_interval_grad_lanes(t, lanes, b, 0, G, NULL), "no box");
+    cr_assert(!ism_eval_interval_grad_lanes(t, lanes, many, ISM_IVGRAD_BATCH + 1, G, NULL),
+              "too many boxes");
+    ism_tape_free(s);
+    cr_assert_eq(ism_ivjet_lane_kinks(t, lanes, b[0], kinks), (size_t)nk[0],
+                 "the pass stands after refused calls");
+    cr_assert(same_bits(k1, kinks, len), "its kinks as the scalar pass's");
     for (int k = 0; k < 2; k++) {
         ism_ivjet J1, J2;
-        uint8_t k1[64], k2[64];
         size_t n1 = ism_eval_interval_jet(t, plain, b[k], NULL, k1, &J1);
         size_t n2 = ism_eval_interval_jet(t, lanes, b[k], NULL, k2, &J2);
         cr_assert(n1 == n2 && same_bits(&J1, &J2, sizeof J1), "box %d: jet after the batch", k);
-        cr_assert(same_bits(k1, k2, ism_tape_length(t)), "box %d: the jet's kinks", k);
+        cr_assert(same_bits(k1, k2, len), "box %d: the jet's kinks", k);
     }
     const ism_interval c[1][3] = { { { 3, 4 }, { 3, 4 }, { 3, 4 } } };
-    cr_assert(ism_eval_interval_grad_lanes(t, lanes, c, 1, G, NULL));
-    uint8_t kinks[64];
+    uint32_t nkc;
+    cr_assert(ism_eval_interval_grad_lanes(t, lanes, c, 1, G, &nkc));
     ism_ivgrad piece[2];
     cr_assert_eq(ism_ivjet_lane_kinks(t, lanes, b[0], kinks), (size_t)-1, "a stale lane's kinks");
     cr_assert(!ism_ivjet_top_pieces(t, lanes, b[0], piece), "a stale lane's pieces");
     ism_tape *u = compile("max(x^2 + y^2 - 1, z) + abs(x - y) + 0");
     cr_assert_eq(ism_ivjet_lane_kinks(u, lanes, c[0], kinks), (size_t)-1, "another tape's lane");
     ism_tape_free(u);
+    /* a smooth tape's batch on the same workspace: t's pass over c is gone */
+    cr_assert_eq(ism_ivjet_lane_kinks(t, lanes, c[0], kinks), (size_t)nkc, "c's pass stands");
+    ism_tape *r = compile("x^2 + y^2 + z^2 - 1");
+    cr_assert(ism_tape_length(r) <= len && r->nregs <= t->nregs, "r fits t's workspace");
+    cr_assert(ism_eval_interval_grad_batch(r, lanes, c, 1, G));
+    cr_assert_eq(ism_ivjet_lane_kinks(t, lanes, c[0], kinks), (size_t)-1,
+                 "t's lane after another tape's batch");
+    cr_assert(!ism_ivjet_top_pieces(t, lanes, c[0], piece), "t's pieces after it");
+    ism_tape_free(r);
     ism_ivjet_ws_free(plain);
     ism_ivjet_ws_free(lanes);
     ism_tape_free(t);
