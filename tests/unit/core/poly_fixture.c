@@ -113,6 +113,17 @@ ism_grid pf_sweep_grid(const double base[6], int d, int which, double box[6])
     return g;
 }
 
+ism_tape *pf_build_sampler(const pf_surface *surf, ism_sampler *s)
+{
+    ism_tape *t = pf_compile(surf);
+    memset(s, 0, sizeof *s);
+    s->tape = t;
+    s->ws = ism_eval_ws_new(t);
+    s->batch = true; /* the build's samplers */
+    cr_assert(s->ws);
+    return t;
+}
+
 void pf_sweep_box_old(const double base[6], int d, int which, double box[6])
 {
     static const double old[3] = {PF_OLD_X, PF_OLD_Y, PF_OLD_Z};

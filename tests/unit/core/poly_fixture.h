@@ -11,6 +11,7 @@
 #include "core/mesh/mesh.h"
 #include "core/octree/grid.h"
 #include "core/octree/polygonise.h"
+#include "core/octree/sampler.h"
 #include "core/singular/locus.h"
 #include "tests/unit/placements.h"
 
@@ -107,6 +108,10 @@ void pf_sweep_box(const double base[6], int d, int which, double box[6]);
 /* The lattice of 2^d steps an axis over base placed by which (pf_sweep_box), its box into box:
  * the octree's grid (grid.h) for tests that build nodes by hand. */
 ism_grid pf_sweep_grid(const double base[6], int d, int which, double box[6]);
+
+/* surf compiled, and *s a sampler of it as the octree build makes them (batched, its own
+ * workspace; the caller frees s->ws and the tape returned). */
+ism_tape *pf_build_sampler(const pf_surface *surf, ism_sampler *s);
 
 /* pf_sweep_box with which 1 at the old rational placement (PF_OLD_*): only for a regression
  * case named as such (a box where a bug was found, run beside the three placements — today the

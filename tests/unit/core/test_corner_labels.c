@@ -114,14 +114,10 @@ static ism_flatness flatness(double max_error, const double box[6])
 
 static void sweep(const pf_surface *surf, int placement)
 {
-    ism_tape *t = pf_compile(surf);
     ism_sampler s;
-    memset(&s, 0, sizeof s);
-    s.tape = t;
-    s.ws = ism_eval_ws_new(t);
-    s.batch = true; /* the build's samplers */
+    ism_tape *t = pf_build_sampler(surf, &s);
     ism_ivjet_ws *jet = ism_ivjet_ws_new(t);
-    cr_assert(s.ws && jet);
+    cr_assert(jet);
     const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
     double box[6];
     ism_grid g = pf_sweep_grid(base, DEPTH, placement, box);

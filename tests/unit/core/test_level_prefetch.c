@@ -70,13 +70,8 @@ static size_t stale_slots(const ism_root_entry *memo, size_t nroots, const ism_r
 
 static size_t compare(const pf_surface *surf, int placement)
 {
-    ism_tape *t = pf_compile(surf);
     ism_sampler s;
-    memset(&s, 0, sizeof s);
-    s.tape = t;
-    s.ws = ism_eval_ws_new(t);
-    s.batch = true; /* the build's samplers */
-    cr_assert(s.ws);
+    ism_tape *t = pf_build_sampler(surf, &s);
     const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
     double box[6];
     ism_grid g = pf_sweep_grid(base, DEPTH, placement, box);
