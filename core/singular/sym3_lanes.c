@@ -21,7 +21,8 @@ INLINE void rotate4(v4d a[3][3], v4d v[3][3], int p, int q, v4i live)
         return;
     v4d one = { 1.0, 1.0, 1.0, 1.0 };
     v4d theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-    v4d t = v4_pick((v4i)(theta >= 0.0), one, -one) / (v4_abs(theta) + v4_sqrt(theta * theta + 1.0));
+    v4d t = v4_pick((v4i)(theta >= 0.0), one, -one) /
+            (v4_abs(theta) + v4_sqrt(theta * theta + 1.0));
     v4d c = 1.0 / v4_sqrt(t * t + 1.0), s = t * c;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
         v4d akp = a[k][p], akq = a[k][q];
