@@ -43,7 +43,6 @@
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_merge.h"
 #include "core/remesh/rm_pass.h"
-#include "core/util/min_norm.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -155,6 +154,18 @@ static bool branches(rm_pass *p, const ism_tape *f, const double x[3], double va
 {
     return ism_eval_crease_branches(f, p->ws, x[0], x[1], x[2], val, g) && isfinite(val[0]) &&
            isfinite(val[1]);
+}
+
+/* f's two top branches, for rm_newton_two. */
+typedef struct branch_pair {
+    rm_pass *p;
+    const ism_tape *f;
+} branch_pair;
+
+static bool branches_of(void *ctx, const double x[3], double val[2], double g[2][3])
+{
+    const branch_pair *c = ctx;
+    return branches(c->p, c->f, x, val, g);
 }
 
 /* Both branches' values v within tol × their gradients' lengths n: on the crease. */
@@ -273,37 +284,20 @@ static bool frame_of(const double g[2][3], crease_frame *cf)
     return true;
 }
 
-/* Minimum-norm Newton steps from x onto both branches of the fan's tape, until x lies
- * within ISM_RM_CREASE_ON_REL × scale of both (on_crease's test, on the values the step
- * would use: no evaluation more), and one step more; false when a step fails or it does not
- * get there. On
- * success *framed says whether cf holds the crease's frame there, from the gradients the
- * last step measured (frame_of). */
+/* Newton from x onto both branches of the fan's tape (rm_newton_two), to within
+ * ISM_RM_CREASE_ON_REL × scale of both (on_crease's test, on the values the step would use:
+ * no evaluation more), and one step more; false when it does not get there. On success
+ * *framed says whether cf holds the crease's frame there, from the gradients the last step
+ * measured (frame_of). */
 static bool to_crease(rm_pass *p, const ism_tape *f, double x[3], double scale,
                       crease_frame *cf, bool *framed)
 {
-    double tol = ISM_RM_CREASE_ON_REL * scale;
-    for (int it = 0; it <= ISM_RM_CREASE_NEWTON_STEPS; it++) {
-        double val[2], g[2][3], step[3];
-        if (!branches(p, f, x, val, g))
-            return false;
-        /* on: one step more, already measured: from within tol it lands at rounding (a
-           merged vertex's fan has edges up to ISM_RM_CREASE_MERGE_REL long, so tol alone
-           left the cube-minus-ball's merged vertices 1.03e-10 off its sphere) */
-        double gn[2] = {ism_norm3(g[0]), ism_norm3(g[1])};
-        bool on = within_both(val, gn, tol);
-        if (on)
-            *framed = frame_of((const double (*)[3])g, cf);
-        else if (it == ISM_RM_CREASE_NEWTON_STEPS)
-            return false;
-        if (!ism_min_norm_step(2, (const double (*)[3])g, val, ISM_RM_CREASE_PARALLEL, step))
-            return on;
-        for (int k = 0; k < 3; k++)
-            x[k] += step[k];
-        if (on)
-            return true;
-    }
-    return false;
+    branch_pair c = {p, f};
+    double g[2][3];
+    if (!rm_newton_two(branches_of, &c, x, ISM_RM_CREASE_ON_REL * scale, g))
+        return false;
+    *framed = frame_of((const double (*)[3])g, cf);
+    return true;
 }
 
 /* rm_crease_tri_ok, or (cf not NULL) the triangle ends on one of the two surfaces meeting

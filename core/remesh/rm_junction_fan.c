@@ -18,7 +18,6 @@
  * dropped, to be measured again when asked. */
 #include "core/remesh/rm_cbound.h"
 #include "core/remesh/rm_pass.h"
-#include "core/util/min_norm.h"
 #include "core/util/vec3.h"
 
 #include <math.h>
@@ -99,6 +98,20 @@ static int vanishing(rm_pass *p, const jf_pieces *s, const double *x)
     return bits;
 }
 
+/* Two of f's pieces, for rm_newton_two. */
+typedef struct piece_pair {
+    rm_pass *p;
+    ism_piece pc[2];
+} piece_pair;
+
+static bool pieces_of(void *ctx, const double x[3], double val[2], double g[2][3])
+{
+    const piece_pair *c = ctx;
+    for (int k = 0; k < 2; k++)
+        val[k] = ism_eval_piece_gradient(c->p->f, c->p->ws, c->pc[k], x[0], x[1], x[2], g[k]);
+    return true;
+}
+
 /* Newton from x onto the common zero of pieces a and b, to within ISM_RM_CREASE_ON_REL ×
  * J's mean edge of both and one step more (rm_crease_slide.c's to_crease: from within that
  * it lands at rounding); g gets ∇f there. False when it does not get there, or f itself does
@@ -107,29 +120,12 @@ static int vanishing(rm_pass *p, const jf_pieces *s, const double *x)
 static bool onto_pair(rm_pass *p, const jf_pieces *s, ism_piece a, ism_piece b, double x[3],
                       double g[3])
 {
-    double tol = ISM_RM_CREASE_ON_REL * s->mean_edge;
-    for (int it = 0; it <= ISM_RM_CREASE_NEWTON_STEPS; it++) {
-        double val[2], gr[2][3], step[3];
-        val[0] = ism_eval_piece_gradient(p->f, p->ws, a, x[0], x[1], x[2], gr[0]);
-        val[1] = ism_eval_piece_gradient(p->f, p->ws, b, x[0], x[1], x[2], gr[1]);
-        if (!isfinite(val[0]) || !isfinite(val[1]))
-            return false;
-        bool on = fabs(val[0]) <= tol * ism_norm3(gr[0]) && fabs(val[1]) <= tol * ism_norm3(gr[1]);
-        if (!on && it == ISM_RM_CREASE_NEWTON_STEPS)
-            return false;
-        if (!ism_min_norm_step(2, (const double(*)[3])gr, val, ISM_RM_CREASE_PARALLEL, step)) {
-            if (!on)
-                return false;
-        } else {
-            for (int k = 0; k < 3; k++)
-                x[k] += step[k];
-        }
-        if (!on)
-            continue;
-        double v = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g), gn = ism_norm3(g);
-        return gn > p->gthresh && fabs(v) <= tol * gn;
-    }
-    return false;
+    double tol = ISM_RM_CREASE_ON_REL * s->mean_edge, gr[2][3];
+    piece_pair c = {p, {a, b}};
+    if (!rm_newton_two(pieces_of, &c, x, tol, gr))
+        return false;
+    double v = ism_eval_gradient(p->f, p->ws, x[0], x[1], x[2], g), gn = ism_norm3(g);
+    return gn > p->gthresh && fabs(v) <= tol * gn;
 }
 
 /* One try: J's needle J–c–w, c on the crease of pieces ab (bits), its next crease vertex

@@ -330,6 +330,14 @@ size_t rm_junction_collapse(rm_pass *p, bool *ok);
  * about it thinner or farther from f = 0 (rm_junction_fan.c). Returns the operations kept
  * (they count in flips). *ok false when out of memory. */
 size_t rm_junction_fan_mend(rm_pass *p, bool *ok);
+
+/* Two functions' values and gradients at x (false: not defined there). */
+typedef bool (*rm_two_eval)(void *ctx, const double x[3], double val[2], double g[2][3]);
+/* Newton from x onto ev's common zero (rm_newton2.c): true when both values came within tol ×
+ * their gradients' lengths of 0 within ISM_RM_CREASE_NEWTON_STEPS steps; x then has taken one
+ * minimum-norm step more (none where the gradients are parallel) and g holds the gradients
+ * measured before that step. False when a value is not finite or it does not get there. */
+bool rm_newton_two(rm_two_eval ev, void *ctx, double x[3], double tol, double g[2][3]);
 /* The sheets that ∇f's unit normals at some vertices fall into, each group's first normal
  * and its tangent plane's offset (n · x at that vertex): a normal more than the crease angle
  * (ISM_RM_CREASE_DEG) from every group's starts a new one. Two on a crease, three or more at
