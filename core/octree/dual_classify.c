@@ -232,6 +232,17 @@ static bool natural_open(const dnode *n, const corner_view *v)
     return !ism_dual_encl_free(&v->g) && !mean_value_free(n, &v->g, v->p[0], v->p[7]);
 }
 
+/* natural_open on the natural enclosure in v->g, read from ism_dual_pre_models' answer when
+ * it took one (pre_open_known: once, as the tail asks once before any tighten). */
+static bool natural_open_once(const dnode *n, corner_view *v)
+{
+    if (v->pre_open_known) {
+        v->pre_open_known = false;
+        return v->pre_open;
+    }
+    return natural_open(n, v);
+}
+
 /* What node i is: empty (proven free of f = 0), a surface leaf, or to be split. */
 
 /* Any two corner gradients within acos(flat_normal): the paper's one-sheet test, which the
@@ -315,7 +326,7 @@ static bool prove_on_halves(dual *d, worker *w, const dnode *n, corner_view *v,
  * alone, then the model's enclosure and the mean-value form on it, then the sub-boxes. */
 static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
 {
-    if (!v->pre_model && !natural_open(n, v))
+    if (!v->pre_model && !natural_open_once(n, v))
         return true;
     if (!take_model(w, v))
         return false;
@@ -671,7 +682,7 @@ int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v)
 {
     int neg = 0;
     v->placed = FOOT_UNKNOWN;
-    v->pre_g = v->pre_model = v->pre_forms = false;
+    v->pre_g = v->pre_model = v->pre_forms = v->pre_open_known = false;
     if (v->corners == CORNERS_NOT_FINITE)
         return DN_INNER;
     if (v->corners)
@@ -711,10 +722,14 @@ int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v)
 
 /* Will classify_tail tighten node n, its natural enclosure in v->g (pre_g)? A node whose
  * corners agree takes no tighten; the others do when natural_open, the tail's own tests
- * before its first tighten, leave them open. */
-static bool tail_tightens(const dnode *n, const corner_view *v)
+ * before its first tighten, leave them open (that answer kept in v for the tail). */
+static bool tail_tightens(const dnode *n, corner_view *v)
 {
-    return !v->agree && natural_open(n, v);
+    if (v->agree)
+        return false;
+    v->pre_open = natural_open(n, v);
+    v->pre_open_known = true;
+    return v->pre_open;
 }
 
 /* Models made at once for fewer nodes cost more than one by one (ism_dual_taylor_many's
@@ -729,7 +744,7 @@ void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const
     bool ok[ISM_IVGRAD_BATCH];
     int pick[ISM_IVGRAD_BATCH], np = 0;
     for (int k = 0; k < nb && np < ISM_IVGRAD_BATCH; k++) {
-        const corner_view *v = &views[at[k]];
+        corner_view *v = &views[at[k]];
         if (!v->pre_g || !tail_tightens(&kids[at[k]], v))
             continue;
         memcpy(lo[np], v->p[0], sizeof lo[np]);
@@ -786,7 +801,7 @@ int ism_dual_classify_tail(dual *d, worker *w, dnode *n, corner_view *v)
                        ? DN_EMPTY
                        : DN_INNER;
         /* pre_model: the enclosure was seen to show no graph (ism_dual_pre_models) */
-        if ((v->pre_model || natural_open(n, v)) &&
+        if ((v->pre_model || natural_open_once(n, v)) &&
             !(tighten(w, v) &&
               (ism_graph_from_enclosure(&v->g) || graph_on_sub_boxes(d, w, n, v))))
             return DN_INNER;
