@@ -4,7 +4,10 @@
  * kind, the same have_model and, with it, the same model to the bit, and the same enclosure
  * left in the view (the models' enclosures at once: ism_dual_over_many). The tail skips the tests
  * ism_dual_pre_models saw fail (dual_classify.c natural_open); if the two ever chose
- * differently, a verdict or a model would differ here. The torus's nodes at levels 3-5 whose
+ * differently, a verdict or a model would differ here. A view the pre-pass left (its kept
+ * natural_open answer in it) reused for another child is classified as a fresh one (split_task's
+ * views are not cleared between nodes: classify_head must clear those answers). The torus's
+ * nodes at levels 3-5 whose
  * box reaches the tube, in three placements (tests/unit/placements.h). */
 #include <criterion/criterion.h>
 #include <math.h>
@@ -25,6 +28,7 @@ typedef struct rig {
     dual d;
     worker w;
     ism_poly_options o;
+    int stale_kept; /* stale views tried that held a kept natural_open answer */
 } rig;
 
 static void set_up(rig *r, const ism_tape *t, int i)
@@ -34,6 +38,7 @@ static void set_up(rig *r, const ism_tape *t, int i)
     pf_options(&r->o, box, 1, DEPTH);
     r->o.max_error = E;
     memset(&r->d, 0, sizeof r->d);
+    r->stale_kept = 0;
     memset(&r->w, 0, sizeof r->w);
     r->d.o = &r->o;
     ism_grid_init(&r->d.g, box, DEPTH);
@@ -97,13 +102,34 @@ static uint8_t corner_count(const dnode *n, const corner_view *v)
     return (uint8_t)(1 + neg);
 }
 
+/* A view left by the pre-pass (stale: ism_dual_pre_models' answers still in it) handed another
+ * node's corners, as split_task's views on its stack are (it sets only a child's inputs, not
+ * the pre-pass's fields): classify_head must clear those answers, so the node is classified as
+ * from a fresh view (want). Returns whether the stale view held a kept natural_open answer. */
+static bool stale_view_classified(rig *r, const corner_view *stale, const dnode *node,
+                                  const corner_view *fresh, int want)
+{
+    corner_view v = *stale;
+    dnode n = *node;
+    memcpy(v.p, fresh->p, sizeof v.p);
+    memcpy(v.n, fresh->n, sizeof v.n);
+    v.corners = fresh->corners;
+    v.foot = fresh->foot;
+    v.known_free = fresh->known_free;
+    v.free_kids = 0;
+    v.kinked = false;
+    cr_assert_eq(ism_dual_classify(&r->d, &r->w, &n, &v), want,
+                 "a view the pre-pass left, reused for another node: another kind");
+    return stale->pre_open_known;
+}
+
 /* The children of the node at q, level, both ways — and a third, with corner_view.corners
  * set beforehand (split_task's path) instead of 0 (classify_head counting them): the same
  * kinds; returns how many children took a model made at once. */
 static int compare_children(rig *r, const int32_t q[3], int level, int placement)
 {
-    dnode kids[8], alone[8], preset[8];
-    corner_view views[8], solo[8], counted[8];
+    dnode kids[8], alone[8], preset[8], node[8];
+    corner_view views[8], solo[8], counted[8], fresh[8], stale[8];
     int half = ism_grid_cell_steps(&r->d.g, level + 1), kind[8], at[8], nb = 0;
     for (int c = 0; c < 8; c++) {
         int32_t k[3] = {q[0] + (c & 1) * half, q[1] + (c >> 1 & 1) * half,
@@ -111,6 +137,8 @@ static int compare_children(rig *r, const int32_t q[3], int level, int placement
         make_node(r, k, level + 1, &kids[c], &views[c]);
         alone[c] = kids[c];
         solo[c] = views[c];
+        node[c] = kids[c];
+        fresh[c] = views[c];
         preset[c] = kids[c];
         counted[c] = views[c];
         counted[c].corners = corner_count(&kids[c], &views[c]);
@@ -136,6 +164,7 @@ static int compare_children(rig *r, const int32_t q[3], int level, int placement
         for (int k = 0; k < nb; k++)
             made += views[at[k]].pre_model;
     }
+    memcpy(stale, views, sizeof stale);
     for (int c = 0; c < 8; c++)
         if (kind[c] == UNDECIDED)
             kind[c] = ism_dual_classify_tail(&r->d, &r->w, &kids[c], &views[c]);
@@ -168,6 +197,16 @@ static int compare_children(rig *r, const int32_t q[3], int level, int placement
                       "placement %d, level %d node (%d %d %d) child %d: another enclosure",
                       placement, level, q[0], q[1], q[2], c);
     }
+    /* each view the pre-pass left with a kept answer, reused for each other child */
+    for (int c = 0; c < 8; c++)
+        for (int b = 0; b < 8 && stale[c].pre_g; b++) {
+            if (b == c)
+                continue;
+            dnode nb = node[b];
+            corner_view vb = fresh[b];
+            int want = ism_dual_classify(&r->d, &r->w, &nb, &vb);
+            r->stale_kept += stale_view_classified(r, &stale[c], &node[b], &fresh[b], want);
+        }
     return made;
 }
 
@@ -201,6 +240,9 @@ Test(dual_pre, children_classified_at_once_as_one_by_one)
          * placement) */
         cr_expect_gt(made, nodes / 4, "placement %d: %d models made at once in %d splits", i,
                      made, nodes);
+        /* the stale views must carry kept answers, or they test nothing */
+        cr_expect_gt(r.stale_kept, nodes, "placement %d: %d stale views with a kept answer", i,
+                     r.stale_kept);
         tear_down(&r);
     }
     ism_tape_free(t);
