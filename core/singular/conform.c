@@ -100,11 +100,47 @@ static bool run_curves(cf_run *r)
     return ok;
 }
 
+/* The points left to conform (sheet-carrying, no curve's end vertex, in the box) when they
+ * are CF_COVER_PLAIN_PASSES or more: their box, grown as each one's first query
+ * (cf_longest_edge_near: CF_RHO_CELLS cells, and as far again ahead), is covered in one pass
+ * over the mesh, where one pass a point would come first and then the growth's, which covers
+ * the box holding every query (conform_grid.c): Barth's sextic, 30 nodes, took 11 passes
+ * (ism_conform_mesh, callgrind: 79.0M -> 61.9M at E 0.0259, 126.9M -> 88.1M at E 0.00389).
+ * The triangles are filed in another order in their cells then, which only the pinch
+ * untangling's list keeps (conform_refine.c): not done where the locus has a pinch point.
+ * False when out of memory. */
+static bool cover_points(cf_run *r)
+{
+    const ism_locus *l = r->l;
+    double lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    size_t n = 0;
+    for (size_t i = 0; i < l->npoints; i++) {
+        const double *p = l->points[i].p;
+        if (l->points[i].type == ISM_SING_PINCH)
+            return true;
+        bool in = carries_sheets(l->points[i].type) && r->point_vertex[i] == CF_NONE;
+        for (int k = 0; k < 3 && in; k++)
+            in = p[k] >= r->o->box[k] && p[k] <= r->o->box[k + 3];
+        if (!in)
+            continue; /* not conformed, or asking its own pass (a point just outside) */
+        n++;
+        for (int k = 0; k < 3; k++) {
+            lo[k] = fmin(lo[k], p[k]);
+            hi[k] = fmax(hi[k], p[k]);
+        }
+    }
+    if (n < CF_COVER_PLAIN_PASSES || r->c.stopped)
+        return true;
+    double r0 = CF_RHO_CELLS * r->c.cell, qlo[3], qhi[3];
+    cf_query_box(lo, hi, r0, qlo, qhi);
+    return cf_ctx_prepare(&r->c) && cf_tgrid_cover(&r->c.grid, r->c.m, qlo, qhi, r0);
+}
+
 static bool run_items(cf_run *r)
 {
     for (size_t i = 0; i < r->l->npoints; i++)
         r->l->points[i].cones = -1;
-    if (!run_curves(r))
+    if (!run_curves(r) || !cover_points(r))
         return false;
     for (size_t i = 0; i < r->l->npoints; i++) {
         if (stop_now(r))
@@ -188,6 +224,7 @@ bool ism_conform_mesh(const ism_tape *f, const ism_locus_options *o, ism_locus *
     bool compacted = r.c.dead == NULL || cf_compact(&r.c);
     if (!ok || !compacted)
         ism_error_set(err, "conform: out of memory");
+    st->grid_passes = r.c.grid.cover_passes;
     cf_ctx_free(&r.c);
     ism_eval_ws_free(r.c.ws);
     free(r.point_vertex);

@@ -46,6 +46,8 @@ typedef struct ism_conform_stats {
     size_t items_stopped;      /* surgeries stopped in the middle (deadline, cancel, work
                                   budget) and undone: their place left as the polygoniser
                                   made it */
+    size_t grid_passes;        /* passes over the polygoniser's triangles that filed them in
+                                  the pass's triangle grid (conform_grid.c's cover passes) */
     double time_ms;
 } ism_conform_stats;
 

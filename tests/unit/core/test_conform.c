@@ -15,6 +15,7 @@
 #include "core/eval/eval.h"
 #include "core/singular/check.h"
 #include "core/singular/conform.h"
+#include "core/singular/conform_internal.h"
 
 /* The refilled strip is at most this many finest cells from the locus (the cut's radius is
  * 2.5 cells, or 1.25 × the longest edge there): centroids this close are "near". */
@@ -333,6 +334,65 @@ Test(conform, kummer_sixteen_nodes)
      * the refill was not measured against f without a bound: its rim edges beside a node are
      * the polygoniser's longest, 1.5 cells; conform_refine.c now halves them). */
     kummer_nodes(kummer16, 16, 2.5, 6, 6, pf_quick() ? 2 : 1);
+}
+
+/* Kummer's 16 nodes, spread over the surface, are CF_COVER_PLAIN_PASSES or more: the pass
+ * covers their box in one pass over the mesh before the first (conform.c's cover_points),
+ * where a pass a node and the growth's would come. The triangles are filed in another order
+ * then, which no answer but the pinch untangling's list depends on: the same locus with a
+ * pinch point added far outside the box (no sheet there, nothing near it to untangle) is
+ * conformed without the early pass, and the meshes must be the same bit for bit, every node
+ * with the same cones, in the three placements (depth 5: polygonised twice each). */
+Test(conform, kummer_sixteen_nodes_one_cover_pass)
+{
+    const pf_surface s = {"(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s", kummer16, 2, kummer_lets,
+                          5};
+    ism_tape *t = pf_compile(&s);
+    ism_locus nodes;
+    ism_locus_init(&nodes);
+    find_nodes(t, 2.5, &nodes);
+    cr_assert_eq(nodes.npoints, 16);
+    cr_assert_geq(nodes.npoints, CF_COVER_PLAIN_PASSES);
+    const double base[6] = {-3, -3, -3, 3, 3, 3};
+    const int d = 5;
+    for (int w = 0; w < 3; w++) {
+        double box[6];
+        shifted_box(base, shift_amount(w, base, d), box);
+        ism_mesh m[2];
+        ism_locus l[2];
+        ism_conform_stats st[2];
+        for (int i = 0; i < 2; i++) {
+            ism_poly_stats ps;
+            pf_run(t, box, 3, d, 1, &m[i], &ps);
+            ism_locus_init(&l[i]);
+            for (size_t j = 0; j < nodes.npoints; j++)
+                cr_assert(ism_locus_add_point(&l[i], &nodes.points[j]));
+            if (i == 1)
+                add_point(&l[i], 100, 100, 100, ISM_SING_PINCH);
+            ism_locus_options o;
+            ism_locus_options_default(&o);
+            memcpy(o.box, box, sizeof o.box);
+            o.max_depth = d;
+            ism_error err;
+            cr_assert(ism_conform_mesh(t, &o, &l[i], &m[i], &st[i], &err), "%s", err.message);
+        }
+        cr_log_info("shift %d: %zu cover passes, %zu without the early one", w,
+                    st[0].grid_passes, st[1].grid_passes);
+        cr_assert_eq(st[0].points_conformed, 16, "shift %d", w);
+        cr_assert_lt(st[0].grid_passes, 3, "shift %d: %zu passes", w, st[0].grid_passes);
+        /* a pass a node, but where one covered its neighbours ahead */
+        cr_assert_gt(st[1].grid_passes, st[0].grid_passes + 3, "shift %d: %zu passes", w,
+                     st[1].grid_passes);
+        pf_same_mesh(&m[0], &m[1], "kummer-16 nodes, early cover pass or not");
+        for (size_t j = 0; j < nodes.npoints; j++)
+            cr_assert_eq(l[0].points[j].cones, l[1].points[j].cones, "shift %d node %zu", w, j);
+        for (int i = 0; i < 2; i++) {
+            ism_mesh_free(&m[i]);
+            ism_locus_free(&l[i]);
+        }
+    }
+    ism_locus_free(&nodes);
+    ism_tape_free(t);
 }
 
 /* ---- two unit spheres touching at the origin ---- */
