@@ -31,13 +31,28 @@
 typedef struct level_side {
     ism_interval range; /* f's interval over the node */
     int limit;          /* the level its children may be split down to */
+    uint32_t tape;      /* the tape it is tested on (level_tapes: 0 f's own) */
 } level_side;
 
 typedef struct level_vec {
     ism_node *v;
     level_side *side;
-    size_t n, cap, side_cap;
+    uint16_t *number; /* beside v when the build shortens: a leaf's number in the build's
+                         leaf_tapes (octree.h's tape_of), else 0 */
+    size_t n, cap, side_cap, number_cap;
 } level_vec;
+
+/* The shortened tapes a task's nodes are tested on, each distinct tape once: a level's nodes
+ * are decided together, so each needs its own (grow keeps one a level, th->tapes, as it
+ * decides one node at a time). Numbered from 1 in an ism_leaf_tapes table of the task's own
+ * (0: f's own tape, b->p->tape); what a number asks of its tape is kept beside it. */
+typedef struct level_tapes {
+    ism_leaf_tapes table;
+    ism_leaf_tapes_cache cache;
+    uint8_t *min_max;  /* per number: 1 + does the tape keep a min/max (0: not asked yet) */
+    uint32_t *leaf;    /* per number: 1 + its number in b->leaf_tapes (0: not asked yet) */
+    size_t cap;
+} level_tapes;
 
 /* Nodes of a level decided together: their corners and roots fit the memos (2^16 corner
  * and 2^13 root entries a thread) with room to spare, and the batches are hundreds wide.
@@ -49,14 +64,104 @@ typedef struct level_vec {
 /* Does ism_grow_levels decide as grow would (see above)? */
 bool ism_levels_apply(const build *b, const thread_state *th)
 {
-    return !b->shortening && !b->previous && !b->p->scalar_eval && th->memo.roots;
+    return !b->previous && !b->p->scalar_eval && th->memo.roots;
+}
+
+static const ism_tape *tape_at(const build *b, const level_tapes *lt, uint32_t id)
+{
+    return id ? lt->table.v[id - 1] : b->p->tape;
+}
+
+/* The number of tape t, as ism_build_node_range returned it below a node tested on tape
+ * `from` (number id): id when it did not shorten, else its copy's. False when out of memory
+ * (or past the table's limits: octree.h's ISM_OCTREE_TAPES distinct tapes in one task). */
+static bool tape_id(build *b, level_tapes *lt, const ism_tape *t, const ism_tape *from,
+                    uint32_t id, uint32_t *out)
+{
+    if (t == from) {
+        *out = id;
+        return true;
+    }
+    unsigned k = ism_leaf_tapes_number(&lt->table, &lt->cache, t);
+    if (k && k > lt->cap) {
+        size_t cap = lt->cap, c2 = lt->cap;
+        if (!ism_grow((void **)&lt->min_max, &cap, k, sizeof *lt->min_max, 64) ||
+            !ism_grow((void **)&lt->leaf, &c2, k, sizeof *lt->leaf, 64))
+            return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
+        memset(lt->min_max + lt->cap, 0, (cap - lt->cap) * sizeof *lt->min_max);
+        memset(lt->leaf + lt->cap, 0, (c2 - lt->cap) * sizeof *lt->leaf);
+        lt->cap = cap < c2 ? cap : c2;
+    }
+    *out = k;
+    return k ? true : ism_build_fail(b, ISM_BUILD_NO_MEMORY);
+}
+
+/* Does tape number id keep a min/max (then each child shortens its own, as in grow)? */
+static bool keeps_min_max(const build *b, level_tapes *lt, uint32_t id)
+{
+    if (!id)
+        return b->shortening != 0;
+    if (!lt->min_max[id - 1])
+        lt->min_max[id - 1] = (uint8_t)(1 + ism_tape_has_min_max(lt->table.v[id - 1]));
+    return lt->min_max[id - 1] == 2;
+}
+
+/* A leaf's number in the build's leaf_tapes (as grow's tape_number: 0 when it finds no
+ * room there, counted as a miss), for a leaf tested on tape number id != 0. */
+static uint16_t leaf_number(build *b, thread_state *th, level_tapes *lt, uint32_t id)
+{
+    if (!lt->leaf[id - 1])
+        lt->leaf[id - 1] = 1 + ism_leaf_tapes_number(&b->leaf_tapes, &th->tape_cache,
+                                                     lt->table.v[id - 1]);
+    uint16_t k = (uint16_t)(lt->leaf[id - 1] - 1);
+    th->tape_misses += k == 0;
+    return k;
+}
+
+/* Room for 8 more nodes in level lv (and their numbers when the build shortens). */
+static bool level_room(const build *b, level_vec *lv)
+{
+    return ism_grow((void **)&lv->v, &lv->cap, lv->n + 8, sizeof *lv->v, 256) &&
+           ism_grow((void **)&lv->side, &lv->side_cap, lv->n + 8, sizeof *lv->side, 256) &&
+           (!b->shortening || ism_grow((void **)&lv->number, &lv->number_cap, lv->n + 8,
+                                       sizeof *lv->number, 256));
+}
+
+/* Split node nd (tested on tape number id, child limit `limit`): its 8 children appended to
+ * next with their ranges and tapes, as grow finds them: in one batch over nd's tape, unless
+ * that tape keeps a min/max the build may drop (each child then shortens its own). */
+static bool split_node(build *b, thread_state *th, level_tapes *lt, const ism_node *nd,
+                       uint32_t id, int limit, level_vec *next)
+{
+    if (!level_room(b, next))
+        return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
+    const ism_tape *sub = tape_at(b, lt, id);
+    ism_interval ranges[8];
+    uint32_t ids[8] = {id, id, id, id, id, id, id, id};
+    ism_node c[8];
+    for (int k = 0; k < 8; k++)
+        c[k] = ism_build_child(b, nd, k);
+    if (!keeps_min_max(b, lt, id))
+        ism_build_children_ranges(b, th, nd, sub, ranges);
+    else
+        for (int k = 0; k < 8; k++)
+            if (!tape_id(b, lt, ism_build_node_range(b, th, &c[k], sub, &ranges[k]), sub, id,
+                         &ids[k]))
+                return false;
+    for (int k = 0; k < 8; k++) {
+        next->side[next->n] = (level_side){ranges[k], limit, ids[k]};
+        if (next->number)
+            next->number[next->n] = 0;
+        next->v[next->n++] = c[k];
+    }
+    return true;
 }
 
 /* Nodes [from, to) of level lv: ranges and force checks, the tested nodes' corners (into
  * corners: room for LEVEL_CHUNK) and roots prefetched, then each decided as grow decides it
  * (its children appended to next). */
-static bool decide_chunk(build *b, thread_state *th, level_vec *lv, size_t from, size_t to,
-                         level_vec *next, ism_corners *corners)
+static bool decide_chunk(build *b, thread_state *th, level_tapes *lt, level_vec *lv,
+                         size_t from, size_t to, level_vec *next, ism_corners *corners)
 {
     const ism_node *tested[LEVEL_CHUNK];
     bool have[LEVEL_CHUNK], asks[LEVEL_CHUNK]; /* asks[j - from]: node j asks the test */
@@ -77,7 +182,8 @@ static bool decide_chunk(build *b, thread_state *th, level_vec *lv, size_t from,
             tested[nt++] = nd;
     }
     const ism_tape *saved = th->s.tape;
-    th->s.tape = b->p->tape; /* the tape the nodes are tested on (ism_levels_apply: f's own) */
+    th->s.tape = b->p->tape; /* corners on f's own tape, as node_corners reads them; a
+                                shortened tape's f is f's own inside its node (roots) */
     ism_prefetch_nodes(&th->memo, th->corners, ISM_CORNER_MEMO_BITS, b->grid, tested, nt,
                        &th->s, corners, have);
     th->s.tape = saved;
@@ -90,25 +196,23 @@ static bool decide_chunk(build *b, thread_state *th, level_vec *lv, size_t from,
             continue;
         ism_node nd = lv->v[j];
         int limit = lv->side[j].limit;
+        uint32_t id = lv->side[j].tape;
+        const ism_tape *sub = tape_at(b, lt, id);
         bool ask = asks[j - from];
         const ism_corners *known = ask && have[t] ? &corners[t] : NULL;
         t += ask;
-        if (ask && ism_build_test_node(b, th, &nd, b->p->tape, known, &lv->v[j], &limit))
-            continue; /* a leaf (state LEAF already: no tape number, f itself) */
+        if (ask && ism_build_test_node(b, th, &nd, sub, known, &lv->v[j], &limit)) {
+            /* a leaf (state LEAF already); the tape its cell evaluates, as grow numbers it */
+            if (id && !(lv->v[j].flags & ISM_NODE_ZERO_FREE) && !b->p->full_tape)
+                lv->number[j] = leaf_number(b, th, lt, id);
+            continue;
+        }
         if ((th->new_nodes += 8) >= NODE_BATCH && !ism_build_count_nodes(b, th))
             return false;
-        if (!ism_grow((void **)&next->v, &next->cap, next->n + 8, sizeof *next->v, 256) ||
-            !ism_grow((void **)&next->side, &next->side_cap, next->n + 8, sizeof *next->side,
-                      256))
-            return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
-        ism_interval ranges[8];
-        ism_build_children_ranges(b, th, &nd, b->p->tape, ranges);
         lv->v[j].state = ISM_NODE_SPLIT;
         lv->v[j].child = (int32_t)next->n;
-        for (int k = 0; k < 8; k++) {
-            next->side[next->n] = (level_side){ranges[k], limit};
-            next->v[next->n++] = ism_build_child(b, &nd, k);
-        }
+        if (!split_node(b, th, lt, &nd, id, limit, next))
+            return false;
     }
     return true;
 }
@@ -119,6 +223,8 @@ static bool lay_out(build *b, node_vec *v, size_t i, const level_vec *lv, int l,
 {
     const ism_node *nd = &lv[l].v[j];
     v->v[i] = *nd;
+    if (v->tape)
+        v->tape[i] = lv[l].number[j];
     if (nd->state != ISM_NODE_SPLIT)
         return true;
     size_t first = v->n;
@@ -133,31 +239,42 @@ static bool lay_out(build *b, node_vec *v, size_t i, const level_vec *lv, int l,
     return true;
 }
 
+/* Level `top`, the task's node alone (range and tape from f's own tape, as grow finds
+ * them), into lv[top]. */
+static bool first_level(build *b, thread_state *th, level_tapes *lt, const ism_node *nd,
+                        int limit, level_vec *lv)
+{
+    ism_interval range;
+    uint32_t id;
+    const ism_tape *t = ism_build_node_range(b, th, nd, b->p->tape, &range);
+    if (!tape_id(b, lt, t, b->p->tape, 0, &id) || !level_room(b, lv))
+        return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
+    lv->v[0] = *nd;
+    lv->side[0] = (level_side){range, limit, id};
+    if (lv->number)
+        lv->number[0] = 0;
+    lv->n = 1;
+    return true;
+}
+
 /* The task's node v->v[0] and its subtree, decided level by level (ism_levels_apply). */
 bool ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit)
 {
     level_vec lv[ISM_GRID_MAX_DEPTH + 2];
     memset(lv, 0, sizeof lv);
     int top = v->v[0].level, l = top;
-    bool ok = true;
-    ism_interval range;
-    ism_build_node_range(b, th, &v->v[0], b->p->tape, &range);
-    lv[top].v = malloc(sizeof *lv[top].v);
-    lv[top].side = malloc(sizeof *lv[top].side);
+    level_tapes *lt = calloc(1, sizeof *lt);
     ism_corners *k = malloc(LEVEL_CHUNK * sizeof *k); /* the chunk's tested nodes' */
-    if (!lv[top].v || !lv[top].side || !k) {
-        free(lv[top].v);
-        free(lv[top].side);
+    if (!lt || !k || !ism_leaf_tapes_init(&lt->table, NULL)) {
+        free(lt);
         free(k);
         return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
     }
-    lv[top].v[0] = v->v[0];
-    lv[top].side[0] = (level_side){range, limit};
-    lv[top].n = lv[top].cap = lv[top].side_cap = 1;
+    bool ok = first_level(b, th, lt, &v->v[0], limit, &lv[top]);
     for (; ok && l <= ISM_GRID_MAX_DEPTH && lv[l].n; l++) {
         for (size_t from = 0; ok && from < lv[l].n; from += LEVEL_CHUNK) {
             size_t to = lv[l].n - from < LEVEL_CHUNK ? lv[l].n : from + LEVEL_CHUNK;
-            ok = decide_chunk(b, th, &lv[l], from, to, &lv[l + 1], k);
+            ok = decide_chunk(b, th, lt, &lv[l], from, to, &lv[l + 1], k);
         }
         free(lv[l].side); /* the level is decided */
         lv[l].side = NULL;
@@ -170,8 +287,12 @@ bool ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit)
     for (int j = top; j <= ISM_GRID_MAX_DEPTH + 1; j++) {
         free(lv[j].v);
         free(lv[j].side);
+        free(lv[j].number);
     }
+    ism_leaf_tapes_free(&lt->table);
+    free(lt->min_max);
+    free(lt->leaf);
+    free(lt);
     free(k);
     return ok;
 }
-
