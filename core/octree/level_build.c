@@ -64,7 +64,7 @@ typedef struct level_tapes {
 /* Does ism_grow_levels decide as grow would (see above)? */
 bool ism_levels_apply(const build *b, const thread_state *th)
 {
-    return !b->previous && !b->p->scalar_eval && th->memo.roots;
+    return !b->previous && !b->p->scalar_eval && !b->p->depth_first && th->memo.roots;
 }
 
 static const ism_tape *tape_at(const build *b, const level_tapes *lt, uint32_t id)

@@ -96,6 +96,9 @@ typedef struct ism_octree_build_params {
                                          reference path: ism_poly_options.scalar_eval) */
     bool full_tape;                   /* leaves evaluate f itself, not a shortened tape (the
                                          reference path: ism_poly_options.full_tape) */
+    bool depth_first;                 /* every task grown node by node, never a level at a
+                                         time (level_build.c): tests hold the two builds
+                                         equal, bit for bit */
     const volatile int *cancel;
     void (*progress)(void *ctx, double fraction); /* fraction of subtrees done */
     void *progress_ctx;
