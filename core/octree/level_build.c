@@ -10,24 +10,32 @@
 #include <string.h>
 
 /* A task's subtree grown level by level (ism_grow_levels): where each node's decision depends
- * on nothing but the node, its range and its limit — a build that shortens no tape (every
- * node evaluates f itself) and takes nothing over from a last round — the nodes of one level
- * are decided together, so the pure values their tests read (corners, edge roots) are
- * computed ahead in wide batches (level_prefetch.h), then laid out in grow's depth-first
- * order (lay_out): the tree, every node's verdict and the counters but the evaluation counts
- * are grow's (the memos end holding other entries, of the same pure values). Klein bottle at
- * E 3.27e-3 (callgrind, one thread, ism_mesh_surface; main 5757910): 3,486.0M -> 3,447.0M,
- * the roots' f 31 points a batch (was 1), the corners' 40 (was 1 to 27); the 87,166 tests
- * themselves unchanged. Not yet for tapes that shorten (each node of a level would need its
- * own shortened tape: gyroid-ball, Barth's sextic) nor for later rounds (take_over). */
+ * on nothing but the node, its range, its limit and the tape it is tested on — a build that
+ * takes nothing over from a last round (take_over) — the nodes of one level are decided
+ * together, so the pure values their tests read (corners, edge roots) are computed ahead in
+ * wide batches (level_prefetch.h), then laid out in grow's depth-first order (lay_out): the
+ * tree, every node's verdict and the counters but the evaluation counts are grow's (the memos
+ * end holding other entries, of the same pure values; the leaf tapes' numbers follow the
+ * order the tapes are met). Klein bottle at E 3.27e-3 (callgrind, one thread,
+ * ism_mesh_surface; main 5757910): 3,486.0M -> 3,447.0M, the roots' f 31 points a batch (was
+ * 1), the corners' 40 (was 1 to 27); the 87,166 tests themselves unchanged.
+ * Tapes that shorten (a min/max the node intervals decide): each node keeps the tape grow
+ * would test it on — its parent's, or the one ism_build_node_range shortened from it — in the
+ * task's table of tapes (level_tapes); the prefetch evaluates f's own tape, which is the
+ * shortened one's value inside the node (shorten.c drops only branches the interval proves
+ * dead there), as node_corners already reads every corner on it. Barth's sextic at E 0.0259
+ * (callgrind, one thread, ism_mesh_surface; main 2db83568): 1,222.4M -> 1,206.8M (the edge
+ * roots in lanes: 59.0M of single searches -> 42.5M); the gyroid ball at E 1.09e-3
+ * 2,251.9M -> 2,250.0M (its sin/cos cost about as much a point in lanes as alone). */
 /* A level's nodes (decided in place; a split node's child: its first child in the next
- * level) and, until the level is decided, what deciding each asks besides the node: its range
- * and limit (side, freed then). The level build keeps every level's nodes until lay_out has
- * copied them: at its peak, while lay_out writes the task's array, 2 ism_node a node (40
- * bytes), and while a level is decided its nodes and the next level's with their sides (24
- * bytes each) beside the levels above — at most ~2.2 times the depth-first build's one
- * ism_node a node under the same max_nodes (the levels kept their 48-byte level_node whole
- * until lay_out before: ~3.4 times, revH 5). */
+ * level) and, until the level is decided, what deciding each asks besides the node: its
+ * range, limit and tape (side, freed then). The level build keeps every level's nodes until
+ * lay_out has copied them: at its peak, while lay_out writes the task's array, 2 ism_node a
+ * node (40 bytes), and while a level is decided its nodes and the next level's with their
+ * sides (24 bytes each) beside the levels above — at most ~2.2 times the depth-first build's
+ * one ism_node a node under the same max_nodes (the levels kept their 48-byte level_node
+ * whole until lay_out before: ~3.4 times, revH 5); a build that shortens keeps 2 bytes more a
+ * node (number) and each distinct tape of the task once (level_tapes). */
 typedef struct level_side {
     ism_interval range; /* f's interval over the node */
     int limit;          /* the level its children may be split down to */
