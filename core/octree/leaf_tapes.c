@@ -32,7 +32,8 @@ static uint64_t mix(uint64_t h, uint64_t x)
     return h ^ (h >> 29);
 }
 
-/* Field by field, as same_tape compares: an instruction's padding bytes are not part of it. */
+/* Field by field, as ism_leaf_tapes_same compares: an instruction's padding bytes are not
+ * part of it. */
 static uint64_t hash_of(const ism_tape *t)
 {
     uint64_t h = mix(mix(mix(0x243f6a8885a308d3ull, t->len), t->result), t->nregs);
@@ -46,7 +47,7 @@ static uint64_t hash_of(const ism_tape *t)
     return h;
 }
 
-static bool same_tape(const ism_tape *a, const ism_tape *b)
+bool ism_leaf_tapes_same(const ism_tape *a, const ism_tape *b)
 {
     if (a->len != b->len || a->result != b->result || a->nregs != b->nregs)
         return false;
@@ -67,7 +68,7 @@ static ism_leaf_tape_slot *slot_of(const ism_leaf_tapes *lt, uint64_t h, const i
     uint32_t tag = (uint32_t)(h >> 32);
     for (size_t i = (size_t)h & mask;; i = (i + 1) & mask) {
         ism_leaf_tape_slot *s = &lt->index[i];
-        if (s->number == 0 || (s->tag == tag && same_tape(lt->v[s->number - 1], t)))
+        if (s->number == 0 || (s->tag == tag && ism_leaf_tapes_same(lt->v[s->number - 1], t)))
             return s;
     }
 }
@@ -128,7 +129,7 @@ unsigned ism_leaf_tapes_number(ism_leaf_tapes *lt, ism_leaf_tapes_cache *cache,
 {
     uint64_t h = hash_of(t);
     ism_leaf_tape_hit *e = &cache->e[h % ISM_LEAF_TAPES_CACHE];
-    if (e->tape && e->hash == h && same_tape(e->tape, t))
+    if (e->tape && e->hash == h && ism_leaf_tapes_same(e->tape, t))
         return e->number;
     pthread_mutex_lock(&lt->lock);
     unsigned k = lt->index_cap ? slot_of(lt, h, t)->number : 0;

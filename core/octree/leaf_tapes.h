@@ -50,6 +50,9 @@ bool ism_leaf_tapes_init(ism_leaf_tapes *lt, const ism_octree *previous);
 unsigned ism_leaf_tapes_number(ism_leaf_tapes *lt, ism_leaf_tapes_cache *cache,
                                const ism_tape *t);
 
+/* Are a and b the same tape, instruction by instruction (the table's equality)? */
+bool ism_leaf_tapes_same(const ism_tape *a, const ism_tape *b);
+
 /* Hands the tapes to tree (tree->tapes, tree->ntapes) and leaves lt empty. */
 void ism_leaf_tapes_give(ism_leaf_tapes *lt, ism_octree *tree);
 

@@ -60,6 +60,9 @@ typedef struct level_tapes {
     uint8_t *min_max;  /* per number: 1 + does the tape keep a min/max (0: not asked yet) */
     uint32_t *leaf;    /* per number: 1 + its number in b->leaf_tapes (0: not asked yet) */
     size_t cap;
+    uint32_t last;     /* the number a shortening got last (0: none yet), compared first:
+                          siblings mostly shorten alike, and a compare costs less than the
+                          table's hash */
 } level_tapes;
 
 /* Nodes of a level decided together: their corners and roots fit the memos (2^16 corner
@@ -90,6 +93,10 @@ static bool tape_id(build *b, level_tapes *lt, const ism_tape *t, const ism_tape
         *out = id;
         return true;
     }
+    if (lt->last && ism_leaf_tapes_same(lt->table.v[lt->last - 1], t)) {
+        *out = lt->last;
+        return true;
+    }
     unsigned k = ism_leaf_tapes_number(&lt->table, &lt->cache, t);
     if (k && k > lt->cap) {
         size_t cap = lt->cap, c2 = lt->cap;
@@ -100,7 +107,7 @@ static bool tape_id(build *b, level_tapes *lt, const ism_tape *t, const ism_tape
         memset(lt->leaf + lt->cap, 0, (c2 - lt->cap) * sizeof *lt->leaf);
         lt->cap = cap < c2 ? cap : c2;
     }
-    *out = k;
+    *out = lt->last = k;
     return k ? true : ism_build_fail(b, ISM_BUILD_NO_MEMORY);
 }
 
@@ -144,24 +151,26 @@ static bool split_node(build *b, thread_state *th, level_tapes *lt, const ism_no
     if (!level_room(b, next))
         return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
     const ism_tape *sub = tape_at(b, lt, id);
+    ism_node *c = &next->v[next->n];
+    level_side *sd = &next->side[next->n];
     ism_interval ranges[8];
-    uint32_t ids[8] = {id, id, id, id, id, id, id, id};
-    ism_node c[8];
     for (int k = 0; k < 8; k++)
         c[k] = ism_build_child(b, nd, k);
-    if (!keeps_min_max(b, lt, id))
+    if (!keeps_min_max(b, lt, id)) {
         ism_build_children_ranges(b, th, nd, sub, ranges);
-    else
         for (int k = 0; k < 8; k++)
-            if (!tape_id(b, lt, ism_build_node_range(b, th, &c[k], sub, &ranges[k]), sub, id,
-                         &ids[k]))
+            sd[k] = (level_side){ranges[k], limit, id};
+    } else {
+        for (int k = 0; k < 8; k++) {
+            const ism_tape *t = ism_build_node_range(b, th, &c[k], sub, &ranges[k]);
+            sd[k] = (level_side){ranges[k], limit, id};
+            if (!tape_id(b, lt, t, sub, id, &sd[k].tape))
                 return false;
-    for (int k = 0; k < 8; k++) {
-        next->side[next->n] = (level_side){ranges[k], limit, ids[k]};
-        if (next->number)
-            next->number[next->n] = 0;
-        next->v[next->n++] = c[k];
+        }
     }
+    if (next->number)
+        memset(&next->number[next->n], 0, 8 * sizeof *next->number);
+    next->n += 8;
     return true;
 }
 
@@ -271,9 +280,10 @@ bool ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit)
     level_vec lv[ISM_GRID_MAX_DEPTH + 2];
     memset(lv, 0, sizeof lv);
     int top = v->v[0].level, l = top;
-    level_tapes *lt = calloc(1, sizeof *lt);
+    /* none when no tape shortens (every node on f's own: number 0) */
+    level_tapes *lt = b->shortening ? calloc(1, sizeof *lt) : NULL;
     ism_corners *k = malloc(LEVEL_CHUNK * sizeof *k); /* the chunk's tested nodes' */
-    if (!lt || !k || !ism_leaf_tapes_init(&lt->table, NULL)) {
+    if ((b->shortening && (!lt || !ism_leaf_tapes_init(&lt->table, NULL))) || !k) {
         free(lt);
         free(k);
         return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
@@ -297,10 +307,12 @@ bool ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit)
         free(lv[j].side);
         free(lv[j].number);
     }
-    ism_leaf_tapes_free(&lt->table);
-    free(lt->min_max);
-    free(lt->leaf);
-    free(lt);
+    if (lt) {
+        ism_leaf_tapes_free(&lt->table);
+        free(lt->min_max);
+        free(lt->leaf);
+        free(lt);
+    }
     free(k);
     return ok;
 }
