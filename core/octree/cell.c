@@ -80,9 +80,20 @@ static bool on_tile(face_walk *w, const ism_node_tile *nt)
     return w->ok;
 }
 
-static bool keep_tile(void *ctx, const ism_tile *tile)
+/* gather_tiles' list: the context and where each face's tiles start. */
+typedef struct tile_gather {
+    ism_cell_ctx *cx;
+    size_t *first;
+    int face; /* faces before this one have their start set */
+} tile_gather;
+
+/* Keeps tile (of the node's face `face`, ism_octree_node_tiles' order), keyed. */
+static bool keep_tile(void *ctx, int face, const ism_tile *tile)
 {
-    ism_cell_ctx *cx = ctx;
+    tile_gather *tg = ctx;
+    ism_cell_ctx *cx = tg->cx;
+    for (; tg->face <= face; tg->face++)
+        tg->first[tg->face] = cx->ntiles;
     if (!ism_grow((void **)&cx->tiles, &cx->cap_tiles, cx->ntiles + 1, sizeof *cx->tiles, 32))
         return false;
     ism_node_tile_set(&cx->tiles[cx->ntiles++], tile);
@@ -97,18 +108,18 @@ static bool whole_face(const ism_tile *t, int32_t s)
     return t->u1 - t->u0 == s && t->v1 - t->v0 == s;
 }
 
-/* The tiles of the node's six faces into cx->tiles, face f's from first[f] to first[f + 1],
- * each keyed as it is kept (ism_node_tile_set) and asked for from memory (ism_tile_prefetch)
- * before any is walked: the node's 8 corners once, the corners of finer tiles with them. */
+/* The tiles of the node's six faces into cx->tiles (found in one pass:
+ * ism_octree_node_tiles), face f's from first[f] to first[f + 1], each keyed as it is kept
+ * (ism_node_tile_set) and asked for from memory (ism_tile_prefetch) before any is walked: the
+ * node's 8 corners once, the corners of finer tiles with them. */
 static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
 {
     cx->ntiles = 0;
-    for (int face = 0; face < 6; face++) {
-        first[face] = cx->ntiles;
-        if (!ism_octree_face_tiles(cx->tree, cx->parent, node, face / 2, face % 2, keep_tile, cx))
-            return false;
-    }
-    first[6] = cx->ntiles;
+    tile_gather tg = {cx, first, 0};
+    if (!ism_octree_node_tiles(cx->tree, cx->parent, node, keep_tile, &tg))
+        return false;
+    for (; tg.face <= 6; tg.face++)
+        first[tg.face] = cx->ntiles;
     if (!cx->ntiles)
         return true; /* no tile: no corner will be looked up */
     const ism_node *nd = &cx->tree->nodes[node];

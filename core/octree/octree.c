@@ -1,12 +1,13 @@
 /* octree.c — queries over a built octree: point location and the tiling of a leaf's face
  * by the leaves across it (what lets a coarse plotting node take in the vertices that finer
- * neighbours put on their shared face: the paper's FixHoles, done by construction). */
+ * neighbours put on their shared face: the paper's FixHoles, done by construction), face by
+ * face or a node's six faces in one pass (the cells'). */
 #include "core/octree/octree.h"
 
 #include <stdlib.h>
 
 /* The child of split node i (which contains o) that contains o. Inline: every descent
- * steps through it (the cells' face tiles, 670,528 steps on the Klein bottle at E 3.27e-3). */
+ * steps through it (ism_octree_find, the face-by-face tiles). */
 static inline int32_t child_toward(const ism_octree *t, int32_t i, const int32_t o[3])
 {
     const ism_node *nd = &t->nodes[i];
@@ -96,28 +97,32 @@ static int32_t find_near(const ism_octree *t, const int32_t *parent, int32_t fro
 
 static ism_tile face_of(const ism_octree *t, const ism_node *nd, int axis, int side)
 {
-    int u = (axis + 1) % 3, v = (axis + 2) % 3;
+    int u = axis == 2 ? 0 : axis + 1, v = axis == 0 ? 2 : axis - 1; /* (axis + 1, 2) % 3 */
     int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
     ism_tile tile = {axis, nd->org[axis] + side * s, nd->org[u], nd->org[u] + s, nd->org[v],
                      nd->org[v] + s};
     return tile;
 }
 
+/* Where a face's tiles go: told the face (2 × axis + side) of the node they tile. */
+typedef bool (*tile_emit)(void *ctx, int face, const ism_tile *tile);
+
 /* Emits the faces (on the plane facing the other node) of the non-empty leaves under
- * node i; `side` is the side of those leaves' faces that touches the plane. */
-static bool collect_leaves(const ism_octree *t, int32_t i, int axis, int side,
-                           bool (*emit)(void *, const ism_tile *), void *ctx)
+ * node i as tiles of `face`; `side` is the side of those leaves' faces that touches the
+ * plane. */
+static bool collect_leaves(const ism_octree *t, int32_t i, int axis, int side, int face,
+                           tile_emit emit, void *ctx)
 {
     const ism_node *nd = &t->nodes[i];
     if (ism_node_void(nd))
         return true;
     if (nd->child < 0) {
         ism_tile tile = face_of(t, nd, axis, side);
-        return emit(ctx, &tile);
+        return emit(ctx, face, &tile);
     }
     for (int k = 0; k < 8; k++)
         if (((k >> axis) & 1) == side)
-            if (!collect_leaves(t, nd->child + k, axis, side, emit, ctx))
+            if (!collect_leaves(t, nd->child + k, axis, side, face, emit, ctx))
                 return false;
     return true;
 }
@@ -136,6 +141,85 @@ static int32_t face_neighbour(const ism_octree *t, const int32_t *parent, int32_
     return find_near(t, parent, node, o, t->nodes[node].level);
 }
 
+/* The tiles of the face (axis, side) of node nd whose neighbour across it is j (-1: none). */
+static bool face_tiles_from(const ism_octree *t, const ism_node *nd, int32_t j, int axis,
+                            int side, tile_emit emit, void *ctx)
+{
+    int face = 2 * axis + side;
+    ism_tile own = face_of(t, nd, axis, side);
+    if (j < 0)
+        return emit(ctx, face, &own); /* the face is on the search box's boundary */
+    const ism_node *nb = &t->nodes[j];
+    if (ism_node_void(nb))
+        return true; /* the face lies in a closed box proven free of f = 0 */
+    if (nb->child < 0 || nb->level < nd->level)
+        return emit(ctx, face, &own); /* the other side is as coarse or coarser */
+    return collect_leaves(t, j, axis, 1 - side, face, emit, ctx);
+}
+
+/* The node across each face of `node` as find_near answers it, climbing node's ancestors
+ * once and only as far as the faces need (into nb[face], -1 on the search box's boundary).
+ * Below their lowest common ancestor, the node's cells lie on `side` of the face along its
+ * axis and the neighbour's on the other, at the same place along the other axes: the
+ * neighbour's path is the node's with the axis bit of its child indices flipped, from the
+ * first ancestor (from the bottom) whose index's bit differs from side (the sibling across
+ * the face there: each level settles one face of each axis), down to the node's level or a
+ * leaf. */
+static void node_neighbours(const ism_octree *t, const int32_t *parent, int32_t node,
+                            int32_t nb[6])
+{
+    /* the faces a child index settles: per axis, the face on the side its bit is not */
+    static const uint8_t settles[8] = {0x2a, 0x29, 0x26, 0x25, 0x1a, 0x19, 0x16, 0x15};
+    int32_t up[ISM_GRID_MAX_DEPTH + 1]; /* up[d]: the node's ancestor d levels up */
+    int k[ISM_GRID_MAX_DEPTH + 1];      /* up[d]'s child index in its parent */
+    int top[6];                         /* per face: the level d its bit differs at */
+    unsigned need = 63;                 /* faces not settled yet */
+    int n = 0;
+    for (int32_t i = node; need && i > 0; i = parent[i], n++) {
+        up[n] = i;
+        k[n] = i - t->nodes[parent[i]].child;
+        unsigned now = need & settles[k[n]];
+        need ^= now;
+        for (; now; now &= now - 1)
+            top[__builtin_ctz(now)] = n;
+    }
+    for (int face = 0; face < 6; face++) {
+        nb[face] = -1;
+        if (need >> face & 1)
+            continue;
+        int flip = 1 << (face / 2), d = top[face];
+        int32_t j = t->nodes[parent[up[d]]].child + (k[d] ^ flip);
+        while (--d >= 0 && t->nodes[j].child >= 0)
+            j = t->nodes[j].child + (k[d] ^ flip);
+        nb[face] = j;
+    }
+}
+
+bool ism_octree_node_tiles(const ism_octree *t, const int32_t *parent, int32_t node,
+                           bool (*emit)(void *ctx, int face, const ism_tile *tile), void *ctx)
+{
+    int32_t nb[6];
+    node_neighbours(t, parent, node, nb);
+    const ism_node *nd = &t->nodes[node];
+    for (int face = 0; face < 6; face++)
+        if (!face_tiles_from(t, nd, nb[face], face / 2, face % 2, emit, ctx))
+            return false;
+    return true;
+}
+
+/* ism_octree_face_tiles' emit behind face_tiles_from's (which tells the face). */
+typedef struct one_face {
+    bool (*emit)(void *ctx, const ism_tile *tile);
+    void *ctx;
+} one_face;
+
+static bool emit_one_face(void *ctx, int face, const ism_tile *tile)
+{
+    (void)face;
+    one_face *of = ctx;
+    return of->emit(of->ctx, tile);
+}
+
 bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t node, int axis,
                            int side, bool (*emit)(void *ctx, const ism_tile *tile), void *ctx)
 {
@@ -144,13 +228,6 @@ bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t n
     int32_t o[3] = {nd->org[0], nd->org[1], nd->org[2]};
     o[axis] += side ? s : -s;
     int32_t j = face_neighbour(t, parent, node, axis, side, o);
-    ism_tile own = face_of(t, nd, axis, side);
-    if (j < 0)
-        return emit(ctx, &own); /* the face is on the search box's boundary */
-    const ism_node *nb = &t->nodes[j];
-    if (ism_node_void(nb))
-        return true; /* the face lies in a closed box proven free of f = 0 */
-    if (nb->child < 0 || nb->level < nd->level)
-        return emit(ctx, &own); /* the other side is as coarse or coarser */
-    return collect_leaves(t, j, axis, 1 - side, emit, ctx);
+    one_face of = {emit, ctx};
+    return face_tiles_from(t, nd, j, axis, side, emit_one_face, &of);
 }

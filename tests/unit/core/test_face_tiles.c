@@ -3,7 +3,10 @@
  * that looks into the parent directly). Its oracle is the same call without parents, which
  * descends from the root as ism_octree_find does: for every node of adapted trees (the torus
  * and the gyroid in a ball, three box placements) and each of its 6 faces, both emit the same
- * tiles in the same order, and every tile lies in that face. */
+ * tiles in the same order, and every tile lies in that face. ism_octree_node_tiles (all six
+ * faces in one climb of the node's ancestors, each neighbour found by flipping the face's bit
+ * of the node's path) against the same oracle face by face: the same tiles bit for bit, each
+ * told its own face, on the torus, Barth's sextic and the gyroid ball. */
 #include <criterion/criterion.h>
 #include <stdlib.h>
 #include <string.h>
@@ -65,49 +68,134 @@ static void in_face(const ism_octree *tree, size_t node, int axis, int side, con
     }
 }
 
-/* Faces whose tiles are a finer neighbour's leaves (more than one tile), over all placements:
- * the walk down the neighbour is exercised, not only the own-face answer. */
-static size_t compare(const pf_surface *s)
+/* The tiles ism_octree_node_tiles emits, with the face each was told. */
+typedef struct face_tile_list {
+    ism_tile v[6 * MAX_TILES];
+    int face[6 * MAX_TILES];
+    size_t n;
+} face_tile_list;
+
+static bool keep_with_face(void *ctx, int face, const ism_tile *tile)
+{
+    face_tile_list *l = ctx;
+    cr_assert_lt(l->n, 6 * MAX_TILES);
+    l->face[l->n] = face;
+    l->v[l->n++] = *tile;
+    return true;
+}
+
+/* The lists a node's check fills, and what the checks count over a sweep. */
+typedef struct sweep {
+    tile_list near, root;
+    face_tile_list all;
+    int placement;
+    size_t finer;    /* faces tiled by a finer neighbour's leaves (more than one tile) */
+    size_t boundary; /* faces on the search box's boundary (no neighbour) */
+} sweep;
+
+/* One node's faces checked: counts into w. */
+typedef void (*node_check)(const ism_octree *tree, const int32_t *parent, size_t node,
+                           sweep *w);
+
+/* check on every node of s's trees in the three placements; *w's counts. */
+static void over_nodes(const pf_surface *s, node_check check, sweep *w)
 {
     ism_tape *t = pf_compile(s);
-    tile_list *near = malloc(sizeof *near), *root = malloc(sizeof *root);
-    cr_assert(near && root);
-    size_t finer = 0;
-    for (int placement = pf_first_box() - 1; placement <= 1; placement++) {
+    w->finer = w->boundary = 0;
+    for (w->placement = pf_first_box() - 1; w->placement <= 1; w->placement++) {
         ism_octree tree;
-        build(t, placement, &tree);
+        build(t, w->placement, &tree);
         int32_t *parent = ism_octree_parents(&tree);
         cr_assert(parent);
         for (size_t i = 0; i < tree.n; i++)
-            for (int face = 0; face < 6; face++) {
-                near->n = root->n = 0;
-                cr_assert(ism_octree_face_tiles(&tree, parent, (int32_t)i, face / 2, face % 2,
-                                                keep, near));
-                cr_assert(ism_octree_face_tiles(&tree, NULL, (int32_t)i, face / 2, face % 2,
-                                                keep, root));
-                cr_assert(near->n == root->n &&
-                              memcmp(near->v, root->v, near->n * sizeof *near->v) == 0,
-                          "placement %d node %zu face %d: %zu tiles from the parent, %zu from "
-                          "the root",
-                          placement, i, face, near->n, root->n);
-                in_face(&tree, i, face / 2, face % 2, root);
-                finer += root->n > 1;
-            }
+            check(&tree, parent, i, w);
         free(parent);
         ism_octree_free(&tree);
     }
-    free(near);
-    free(root);
     ism_tape_free(t);
-    return finer;
+}
+
+/* Each face's tiles from the parent as from the root, inside the face. */
+static void from_the_parent(const ism_octree *tree, const int32_t *parent, size_t i, sweep *w)
+{
+    for (int face = 0; face < 6; face++) {
+        w->near.n = w->root.n = 0;
+        cr_assert(ism_octree_face_tiles(tree, parent, (int32_t)i, face / 2, face % 2, keep,
+                                        &w->near));
+        cr_assert(ism_octree_face_tiles(tree, NULL, (int32_t)i, face / 2, face % 2, keep,
+                                        &w->root));
+        cr_assert(w->near.n == w->root.n &&
+                      memcmp(w->near.v, w->root.v, w->near.n * sizeof *w->near.v) == 0,
+                  "placement %d node %zu face %d: %zu tiles from the parent, %zu from the root",
+                  w->placement, i, face, w->near.n, w->root.n);
+        in_face(tree, i, face / 2, face % 2, &w->root);
+        w->finer += w->root.n > 1;
+    }
+}
+
+/* node_tiles' list is, face after face, what ism_octree_face_tiles answers from the root (no
+ * parents) for that face, bit for bit, each tile told that face. */
+static void one_pass(const ism_octree *tree, const int32_t *parent, size_t i, sweep *w)
+{
+    w->all.n = 0;
+    cr_assert(ism_octree_node_tiles(tree, parent, (int32_t)i, keep_with_face, &w->all));
+    size_t at = 0;
+    const ism_node *nd = &tree->nodes[i];
+    int32_t steps = ism_grid_cell_steps(&tree->grid, nd->level);
+    for (int face = 0; face < 6; face++) {
+        w->root.n = 0;
+        cr_assert(ism_octree_face_tiles(tree, NULL, (int32_t)i, face / 2, face % 2, keep,
+                                        &w->root));
+        cr_assert(at + w->root.n <= w->all.n &&
+                      memcmp(&w->all.v[at], w->root.v, w->root.n * sizeof *w->root.v) == 0,
+                  "placement %d node %zu face %d: one pass differs from the face's own %zu "
+                  "tiles", w->placement, i, face, w->root.n);
+        for (size_t k = 0; k < w->root.n; k++)
+            cr_assert_eq(w->all.face[at + k], face, "placement %d node %zu: a tile of face %d "
+                         "told face %d", w->placement, i, face, w->all.face[at + k]);
+        at += w->root.n;
+        w->finer += w->root.n > 1;
+        int32_t plane = nd->org[face / 2] + face % 2 * steps;
+        w->boundary += plane == 0 || plane == ((int32_t)1 << tree->grid.depth);
+    }
+    cr_assert_eq(at, w->all.n, "placement %d node %zu: %zu tiles in one pass, %zu face by face",
+                 w->placement, i, w->all.n, at);
+}
+
+/* The sweep of check over s, its finer faces (the walk down the neighbour is exercised, not
+ * only the own-face answer) and, with `boundary`, faces on the box's boundary counted. */
+static void sweep_checks(const pf_surface *s, node_check check, bool boundary)
+{
+    sweep *w = malloc(sizeof *w);
+    cr_assert(w);
+    over_nodes(s, check, w);
+    cr_assert_gt(w->finer, 100);
+    if (boundary)
+        cr_assert_gt(w->boundary, 0);
+    free(w);
 }
 
 Test(face_tiles, torus_from_the_parent_as_from_the_root)
 {
-    cr_assert_gt(compare(&pf_ring_torus), 100);
+    sweep_checks(&pf_ring_torus, from_the_parent, false);
 }
 
 Test(face_tiles, gyroid_ball_from_the_parent_as_from_the_root)
 {
-    cr_assert_gt(compare(&pf_gyroid_ball), 100);
+    sweep_checks(&pf_gyroid_ball, from_the_parent, false);
+}
+
+Test(face_tiles, node_tiles_as_face_by_face_torus)
+{
+    sweep_checks(&pf_ring_torus, one_pass, true);
+}
+
+Test(face_tiles, node_tiles_as_face_by_face_barth)
+{
+    sweep_checks(&pf_barth_sextic, one_pass, true);
+}
+
+Test(face_tiles, node_tiles_as_face_by_face_gyroid_ball)
+{
+    sweep_checks(&pf_gyroid_ball, one_pass, true);
 }
