@@ -38,9 +38,10 @@ typedef struct ism_cell_ctx {
                                  one_leaf polygonises a leaf again whose fans, split along
                                  the crease, left it unresolved (the sides then fanned from
                                  their centres: max_error 0) */
-    bool walk_every_tile;     /* the tile memos (cell_cache.h) are neither asked nor filled
+    bool walk_every_tile;     /* the tile memos (cell_cache.h) are neither asked nor filled,
+                                 and no tile is taken as quiet by its corners alone
                                  (poly_options.h's walk_every_tile: the reference the tests
-                                 compare memo hits with) */
+                                 compare memo hits and that shortcut with) */
     /* scratch, reused from node to node */
     ism_bpoint *bp;
     size_t nbp, cap_bp;
@@ -66,6 +67,7 @@ typedef struct ism_cell_ctx {
      * copied leaf adds its stats again): work saved, not a fact of the mesh */
     uint64_t quiet_skips;     /* tiles found in the quiet memo: not walked again */
     uint64_t tile_replays;    /* tiles whose lines were copied from the crossed-tile memo */
+    uint64_t corner_quiets;   /* tiles quiet by their corners alone: their sides not walked */
     uint64_t corner_values;   /* lattice points whose f and ∇f came from `corners` */
 } ism_cell_ctx;
 

@@ -95,10 +95,10 @@ static ism_lattice_entry *lattice_slot(ism_cell_ctx *cx, uint64_t hash)
  * segment from there found a root 1e-15 away, the one node on the negative side cut off its
  * corner by a triangle of those three roots lying in its lower face in floating point, which
  * that face's owner never emits: a hole of three zero-length edges at each such point). */
-static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip[3])
+static __attribute__((noinline)) const ism_lattice_entry *
+lattice_fill(ism_cell_ctx *cx, ism_lattice_entry *e, const int32_t ip[3], uint64_t key,
+             uint64_t hash)
 {
-    uint64_t key = ism_lattice_key(ip), hash = ism_cache_mix(key);
-    ism_lattice_entry *e = lattice_slot(cx, hash);
     if (e->key != key) {
         double p[3];
         __builtin_prefetch(ism_breaks_slot(cx->breaks, hash));
@@ -130,6 +130,17 @@ static const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip
         e->round = cx->cache.round;
     }
     return e;
+}
+
+/* lattice_fill, asked only when the memo's entry does not hold the point for this round (a
+ * hit returns it directly). */
+static inline const ism_lattice_entry *lattice_entry(ism_cell_ctx *cx, const int32_t ip[3])
+{
+    uint64_t key = ism_lattice_key(ip), hash = ism_cache_mix(key);
+    ism_lattice_entry *e = lattice_slot(cx, hash);
+    if (e->key == key && e->round == cx->cache.round)
+        return e;
+    return lattice_fill(cx, e, ip, key, hash);
 }
 
 /* Room for one more boundary point: its slot at the end of cx->bp (counted), or NULL when
@@ -231,13 +242,33 @@ static inline bool push_corner(ism_cell_ctx *cx, const tile_corner *c)
     return true;
 }
 
+static bool rootless(const ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpoint *hi);
+
+/* Is the tile quiet by its corners alone: no break point between them, none a zero point, and
+ * each side rootless in its canonical direction (the first two sides run up from corners 0
+ * and 1, the last two down to corners 3 and 0)? Then its walk finds no event (tile_events:
+ * every segment is a side, skipped as rootless, and no zero point starts one), exactly. */
+static bool quiet_by_corners(const ism_cell_ctx *cx, const ism_tile *t, int u, int v,
+                             const tile_corner c[4])
+{
+    bool neg = c[0].b.f < 0; /* a side between signs is never rootless: not tested */
+    return c[0].next[u] >= t->u1 && c[1].next[v] >= t->v1 && c[3].next[u] >= t->u1 &&
+           c[0].next[v] >= t->v1 && c[0].b.f != 0 && c[1].b.f != 0 && c[2].b.f != 0 &&
+           c[3].b.f != 0 && (c[1].b.f < 0) == neg && (c[2].b.f < 0) == neg &&
+           (c[3].b.f < 0) == neg && rootless(cx, &c[0].b, &c[1].b) &&
+           rootless(cx, &c[1].b, &c[2].b) && rootless(cx, &c[3].b, &c[2].b) &&
+           rootless(cx, &c[0].b, &c[3].b);
+}
+
 /* Walks the tile boundary counter-clockwise in (u, v), collecting every break point: each
  * side from its first corner toward the next, which is left out (it starts the next side).
  * The four corners are looked up once each (a side's points between its corners follow
  * from its lower corner's successors). A side's lower corner is a corner of a non-empty
  * leaf (every side of a tile is an edge of one), so it is registered: false when it is not
- * (a bug; cx->unregistered is then set), or when memory runs out. */
-static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
+ * (a bug; cx->unregistered is then set), or when memory runs out. A tile quiet by its
+ * corners alone (quiet_by_corners; not under walk_every_tile) sets *quiet and collects
+ * nothing. */
+static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t, bool *quiet)
 {
     int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
     tile_corner c[4];
@@ -255,6 +286,9 @@ static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t)
         return false;
     }
     cx->nbp = 0;
+    *quiet = !cx->walk_every_tile && quiet_by_corners(cx, t, u, v, c);
+    if (*quiet)
+        return true;
     return push_corner(cx, &c[0]) && side_between(cx, u, &c[0], t->u1, true) &&
            push_corner(cx, &c[1]) && side_between(cx, v, &c[1], t->v1, true) &&
            push_corner(cx, &c[2]) && side_between(cx, u, &c[3], t->u1, false) &&
@@ -316,8 +350,9 @@ static bool prefetch_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bp
 
 /* Roots of the segment a→b in walking order, computed in the canonical direction; none
  * without a look when `may_have_roots` is false (prefetch_segment said it is rootless). */
-static void walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b,
-                         bool may_have_roots, ism_seg_roots *out)
+static inline __attribute__((always_inline)) void
+walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b, bool may_have_roots,
+             ism_seg_roots *out)
 {
     if (!may_have_roots) {
         out->n = 0;
@@ -1208,8 +1243,15 @@ static bool replay(ism_cell_ctx *cx, const ism_tile_memo *m)
 static bool walk_tile(ism_cell_ctx *cx, const ism_tile *t, const ism_quiet_tile *key,
                       ism_quiet_tile *q)
 {
-    if (!tile_boundary(cx, t))
+    bool quiet;
+    if (!tile_boundary(cx, t, &quiet))
         return false;
+    if (quiet) {
+        cx->corner_quiets++;
+        cx->nev = 0;
+        *q = *key;
+        return true;
+    }
     if (is_zero_tile(cx, t)) {
         cx->zero_tile = true;
         return true;

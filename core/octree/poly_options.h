@@ -77,8 +77,9 @@ typedef struct ism_poly_options {
     bool walk_every_tile;   /* every node walks each tile of its faces itself: no memo of the
                                tiles another node of the thread walked in the round (quiet
                                ones, and crossed ones whose lines and counts a hit copies:
-                               cell_cache.h) — the same mesh bit for bit, for more; on is for
-                               tests (default off) */
+                               cell_cache.h), and every tile walked side by side, even one
+                               quiet by its corners alone (face_lines.c) — the same mesh bit
+                               for bit, for more; on is for tests (default off) */
     bool full_tape;         /* every leaf evaluates f itself, not f shortened by intervals over
                                its box (octree.h) — the same mesh bit for bit, for more; on is
                                for tests (default off) */

@@ -510,6 +510,7 @@ static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
     st->lifted_chords += cx->stats.lifted_chords;
     st->quiet_skips += cx->quiet_skips;
     st->tile_replays += cx->tile_replays;
+    st->corner_quiets += cx->corner_quiets;
     st->corner_values += cx->corner_values;
     st->evals_point += cx->s.n_point;
     st->evals_gradient += cx->s.n_gradient;

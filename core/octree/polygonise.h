@@ -98,6 +98,8 @@ typedef struct ism_poly_stats {
                                     and nothing crossed them (cell_cache.h's quiet memo) */
     uint64_t tile_replays;       /* tiles a node did not walk: their lines copied from the
                                     thread's first walk (cell_cache.h's crossed-tile memo) */
+    uint64_t corner_quiets;      /* tiles a node did not walk: quiet by their corners alone
+                                    (face_lines.c quiet_by_corners) */
     uint64_t corner_values;      /* lattice points whose f and ∇f the cells took from the
                                     octree build's corner memo instead of evaluating them
                                     (octree_build.h's corner_memos), over all rounds */

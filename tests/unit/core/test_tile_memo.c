@@ -11,7 +11,10 @@
  * bound (the gyroid's rounds: the memos are forgotten between rounds), on 1 and 2
  * threads. And the memos are really used: in every run tiles are found in both (counted
  * in ism_poly_stats' quiet_skips and tile_replays, both 0 without them), and the cells
- * evaluate f fewer times (over all these runs). */
+ * evaluate f fewer times (over all these runs). The same comparison guards the walk's
+ * shortcut for a tile quiet by its corners alone (face_lines.c quiet_by_corners: no point
+ * between them, none zero, its four sides rootless), also off under walk_every_tile and
+ * taken in every run (corner_quiets). */
 #include <criterion/criterion.h>
 #include "poly_fixture.h"
 #include "test_eval_surfaces.h"
@@ -77,6 +80,10 @@ Test(tile_memo, a_hit_is_the_fresh_walk_bit_for_bit, .timeout = 240)
                              "skipped", n, w, threads);
                 cr_expect_gt(st[0].tile_replays, 0, "%s box %d, %d threads: no tile replayed",
                              n, w, threads);
+                cr_expect_gt(st[0].corner_quiets, 0, "%s box %d, %d threads: no tile quiet by "
+                             "its corners", n, w, threads);
+                cr_expect_eq(st[1].corner_quiets, 0, "%s box %d: walk_every_tile took a tile "
+                             "as quiet by its corners", n, w);
                 cr_expect_eq(st[1].quiet_skips, 0, "%s box %d: walk_every_tile skipped", n, w);
                 cr_expect_eq(st[1].tile_replays, 0, "%s box %d: walk_every_tile replayed", n,
                              w);
