@@ -31,7 +31,7 @@ typedef struct face_walk {
 static bool sign_changes_across(ism_cell_ctx *cx, const ism_tile *t)
 {
     const ism_grid *g = &cx->tree->grid;
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     double c[3];
     c[t->axis] = ism_grid_coord(g, t->axis, t->plane);
     c[u] = 0.5 * (ism_grid_coord(g, u, t->u0) + ism_grid_coord(g, u, t->u1));
@@ -138,7 +138,7 @@ static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
 static bool on_tile_boundary(const ism_grid *g, const ism_tile *t, const double a[3],
                              const double b[3])
 {
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     double w = ism_grid_coord(g, t->axis, t->plane);
     double u0 = ism_grid_coord(g, u, t->u0), u1 = ism_grid_coord(g, u, t->u1);
     double v0 = ism_grid_coord(g, v, t->v0), v1 = ism_grid_coord(g, v, t->v1);
@@ -156,7 +156,7 @@ static bool on_tile_boundary(const ism_grid *g, const ism_tile *t, const double 
 /* Does p lie in tile t (its plane, within its extent; world coordinates)? */
 static bool in_tile(const ism_grid *g, const ism_tile *t, const double p[3])
 {
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     return p[t->axis] == ism_grid_coord(g, t->axis, t->plane) &&
            p[u] >= ism_grid_coord(g, u, t->u0) && p[u] <= ism_grid_coord(g, u, t->u1) &&
            p[v] >= ism_grid_coord(g, v, t->v0) && p[v] <= ism_grid_coord(g, v, t->v1);

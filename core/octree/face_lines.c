@@ -180,7 +180,7 @@ static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3], const ism_lattice
  * (u1, v1), (u0, v1). */
 static inline void tile_corners(const ism_tile *t, int32_t q[4][3])
 {
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
     for (int k = 0; k < 4; k++) {
         q[k][t->axis] = t->plane;
@@ -270,7 +270,7 @@ static bool quiet_by_corners(const ism_cell_ctx *cx, const ism_tile *t, int u, i
  * nothing. */
 static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t, bool *quiet)
 {
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     tile_corner c[4];
     int32_t q[4][3];
     tile_corners(t, q);
@@ -495,7 +495,7 @@ static double unit_dot(const double a[3], const double b[3])
 static void tile_centre(const ism_cell_ctx *cx, const ism_tile *t, double c[3])
 {
     const ism_grid *g = &cx->tree->grid;
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     c[t->axis] = ism_grid_coord(g, t->axis, t->plane);
     c[u] = 0.5 * (ism_grid_coord(g, u, t->u0) + ism_grid_coord(g, u, t->u1));
     c[v] = 0.5 * (ism_grid_coord(g, v, t->v0) + ism_grid_coord(g, v, t->v1));
@@ -504,7 +504,7 @@ static void tile_centre(const ism_cell_ctx *cx, const ism_tile *t, double c[3])
 static double tile_size(const ism_cell_ctx *cx, const ism_tile *t)
 {
     const ism_grid *g = &cx->tree->grid;
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     double su = g->step[u] * (t->u1 - t->u0), sv = g->step[v] * (t->v1 - t->v0);
     return su < sv ? su : sv;
 }
@@ -513,7 +513,7 @@ static double tile_size(const ism_cell_ctx *cx, const ism_tile *t)
 static bool chords_cross(const ism_tile *t, const double p0[3], const double p1[3],
                          const double q0[3], const double q1[3], double x[3])
 {
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     double du = p1[u] - p0[u], dv = p1[v] - p0[v], eu = q1[u] - q0[u], ev = q1[v] - q0[v];
     double den = du * ev - dv * eu;
     if (den == 0)
@@ -554,7 +554,7 @@ static int tile_plane_crossing(ism_cell_ctx *cx, const ism_tile *t, const double
                                ism_fpoint *apex)
 {
     const ism_grid *g = &cx->tree->grid;
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     double lo[2] = {ism_grid_coord(g, u, t->u0), ism_grid_coord(g, v, t->v0)};
     double hi[2] = {ism_grid_coord(g, u, t->u1), ism_grid_coord(g, v, t->v1)};
     return ism_plane_crossing(&cx->s, t->axis, x, lo, hi, apex);
@@ -668,7 +668,7 @@ static bool on_one_side(const ism_cell_ctx *cx, const ism_tile *t, const double 
                         const double q[3], int *axis, double *from, double *to)
 {
     const ism_grid *g = &cx->tree->grid;
-    int uv[2] = {(t->axis + 1) % 3, (t->axis + 2) % 3};
+    int uv[2] = {ism_axis_next(t->axis), ism_axis_prev(t->axis)};
     double s[2][2] = {{ism_grid_coord(g, uv[0], t->u0), ism_grid_coord(g, uv[0], t->u1)},
                       {ism_grid_coord(g, uv[1], t->v0), ism_grid_coord(g, uv[1], t->v1)}};
     for (int a = 0; a < 2; a++)
@@ -769,7 +769,7 @@ static bool arcs_joined_around(ism_cell_ctx *cx, const ism_tile *t, const int *c
  * not cross or f is 0 there. */
 static int joined_where_paths_cross(ism_cell_ctx *cx, const ism_tile *t, const int *cross)
 {
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     double p1[3], p2[3], q1[3], q2[3];
     arc_path(cx, cross, 0, p1, p2);
     arc_path(cx, cross, 1, q1, q2);
@@ -940,7 +940,7 @@ static bool is_zero_tile(ism_cell_ctx *cx, const ism_tile *t)
     if (!(fabs(ism_sample_f(&cx->s, c)) <= cx->roots.eps))
         return false;
     const ism_grid *g = &cx->tree->grid;
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     double u0 = ism_grid_coord(g, u, t->u0), u1 = ism_grid_coord(g, u, t->u1);
     double v0 = ism_grid_coord(g, v, t->v0), v1 = ism_grid_coord(g, v, t->v1);
     for (int k = 0; k < 2; k++) {
@@ -981,7 +981,7 @@ static void zero_run_point(ism_cell_ctx *cx, const double q[3], ism_fpoint *P)
  * sharing the run find the same P bit for bit. Returns i, or -1. */
 static int zero_run_crossing(ism_cell_ctx *cx, const ism_tile *t, ism_fpoint *P)
 {
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3, ne = (int)cx->nev;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis), ne = (int)cx->nev;
     for (int i = 0; i < ne; i++) {
         const ism_fevent *a = &cx->ev[i], *b = &cx->ev[(i + 1) % ne];
         if (a->after != 0 || b->before != 0 || a == b)
@@ -1022,7 +1022,7 @@ static int zero_run_crossing(ism_cell_ctx *cx, const ism_tile *t, ism_fpoint *P)
  * lines). Returns its event index, or -1. */
 static int zero_run_tangent_end(const ism_cell_ctx *cx, const ism_tile *t)
 {
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     for (int i = 0; i < (int)cx->nev; i++) {
         const ism_fevent *e = &cx->ev[i];
         if (!(e->pt.flags & ISM_FP_ZERO) || (e->before != 0 && e->after != 0))
@@ -1088,7 +1088,7 @@ static int singular_run(ism_cell_ctx *cx, const ism_tile *t, double gcross, int 
 {
     const ism_grid *g = &cx->tree->grid;
     double gzero = TANGENT_PLANE_REL * gcross; /* ∇f "vanishes": rounding of an exact 0 */
-    int u = (t->axis + 1) % 3, v = (t->axis + 2) % 3, ne = (int)cx->nev;
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis), ne = (int)cx->nev;
     *end = -1;
     for (int i = 0; i < ne; i++) {
         int j = (i + 1) % ne;
@@ -1146,26 +1146,6 @@ static int singular_run(ism_cell_ctx *cx, const ism_tile *t, double gcross, int 
     return -1;
 }
 
-/* The tile as a quiet-tile memo entry (lattice coordinates take 20 bits, the axis 2). */
-static ism_quiet_tile quiet_key(const ism_tile *t)
-{
-    return (ism_quiet_tile){
-        ((uint64_t)t->axis << 40 | (uint64_t)t->plane << 20 | (uint64_t)t->u0) + 1,
-        (uint64_t)t->v0 << 40 | (uint64_t)t->u1 << 20 | (uint64_t)t->v1};
-}
-
-/* The tile's hash, which each tile table masks to its own size (a tile is quiet or crossed
- * in a round, never both, and the tables are apart: one hash serves both). The key's two
- * words are folded into one before the mixer as `where` times an odd constant plus `span`:
- * a plain sum would add u0 to v1 and the plane to u1, so tiles with those swapped would fold
- * alike, while an odd multiplier is a bijection on 64 bits that moves `where`'s fields off
- * the span's (any odd one does; 31 is small). A fold collision only costs a miss: each slot
- * compares the whole key. */
-static uint64_t tile_hash(const ism_quiet_tile *k)
-{
-    return ism_cache_mix(k->where * 31 + k->span);
-}
-
 static ism_quiet_tile *quiet_slot(ism_cell_ctx *cx, uint64_t hash)
 {
     return &cx->cache.quiet[hash & (((uint64_t)1 << ISM_QUIET_CACHE_BITS) - 1)];
@@ -1181,13 +1161,6 @@ void ism_lattice_prefetch(ism_cell_ctx *cx, const int32_t ip[3])
     uint64_t h = ism_cache_mix(ism_lattice_key(ip));
     __builtin_prefetch(lattice_slot(cx, h), 1);
     __builtin_prefetch(ism_breaks_slot(cx->breaks, h));
-}
-
-void ism_node_tile_set(ism_node_tile *nt, const ism_tile *t)
-{
-    nt->t = *t;
-    nt->key = quiet_key(t);
-    nt->hash = tile_hash(&nt->key);
 }
 
 void ism_tile_prefetch(ism_cell_ctx *cx, const ism_node_tile *nt, bool corners)

@@ -23,8 +23,33 @@ typedef struct ism_node_tile {
     uint64_t hash;
 } ism_node_tile;
 
-/* Sets nt to tile t with its key and hash. */
-void ism_node_tile_set(ism_node_tile *nt, const ism_tile *t);
+/* The tile as a quiet-tile memo entry (lattice coordinates take 20 bits, the axis 2). */
+static inline ism_quiet_tile ism_quiet_key(const ism_tile *t)
+{
+    return (ism_quiet_tile){
+        ((uint64_t)t->axis << 40 | (uint64_t)t->plane << 20 | (uint64_t)t->u0) + 1,
+        (uint64_t)t->v0 << 40 | (uint64_t)t->u1 << 20 | (uint64_t)t->v1};
+}
+
+/* The tile's hash, which each tile table masks to its own size (a tile is quiet or crossed
+ * in a round, never both, and the tables are apart: one hash serves both). The key's two
+ * words are folded into one before the mixer as `where` times an odd constant plus `span`:
+ * a plain sum would add u0 to v1 and the plane to u1, so tiles with those swapped would fold
+ * alike, while an odd multiplier is a bijection on 64 bits that moves `where`'s fields off
+ * the span's (any odd one does; 31 is small). A fold collision only costs a miss: each slot
+ * compares the whole key. */
+static inline uint64_t ism_tile_hash(const ism_quiet_tile *k)
+{
+    return ism_cache_mix(k->where * 31 + k->span);
+}
+
+/* Sets nt to tile t with its key and hash (inline: every tile of a node's faces is kept so). */
+static inline void ism_node_tile_set(ism_node_tile *nt, const ism_tile *t)
+{
+    nt->t = *t;
+    nt->key = ism_quiet_key(t);
+    nt->hash = ism_tile_hash(&nt->key);
+}
 
 /* Asks the memory for what ism_tile_lines will read first about tile nt->t (its quiet-tile
  * memo slot, the first cache line of its crossed-tile memo slot, and with `corners` its

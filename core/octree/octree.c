@@ -97,7 +97,7 @@ static int32_t find_near(const ism_octree *t, const int32_t *parent, int32_t fro
 
 static ism_tile face_of(const ism_octree *t, const ism_node *nd, int axis, int side)
 {
-    int u = axis == 2 ? 0 : axis + 1, v = axis == 0 ? 2 : axis - 1; /* (axis + 1, 2) % 3 */
+    int u = ism_axis_next(axis), v = ism_axis_prev(axis);
     int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
     ism_tile tile = {axis, nd->org[axis] + side * s, nd->org[u], nd->org[u] + s, nd->org[v],
                      nd->org[v] + s};

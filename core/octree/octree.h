@@ -120,8 +120,13 @@ int ism_octree_path(const ism_octree *t, const int32_t o[3], int level,
  * out of memory). */
 int32_t *ism_octree_parents(const ism_octree *t);
 
+/* The axes after `axis` in cyclic order, (axis + 1) % 3 and (axis + 2) % 3, without the
+ * division (a tile's walk asks them of every tile). */
+static inline int ism_axis_next(int axis) { return axis == 2 ? 0 : axis + 1; }
+static inline int ism_axis_prev(int axis) { return axis == 0 ? 2 : axis - 1; }
+
 /* A rectangle of a lattice plane: the face of one leaf, used as a piece of another node's
- * face. u = (axis+1)%3, v = (axis+2)%3. */
+ * face. u = (axis+1)%3, v = (axis+2)%3 (ism_axis_next, ism_axis_prev). */
 typedef struct ism_tile {
     int axis;
     int32_t plane;
