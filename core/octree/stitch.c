@@ -33,6 +33,7 @@ typedef struct end_ref {
 
 typedef struct graph {
     const ism_flines *l;
+    bool plain;     /* plain_pairs: every end paired, no terminal point (node unset) */
     int *node;      /* per end: its point's index */
     int *partner;   /* per end: the single-polygon end it continues into, or -1 */
     bool *terminal; /* per point: some shared line ends here */
@@ -185,6 +186,57 @@ static bool grouped_ends(const ism_flines *l, size_t ne, int *order, const ism_f
     return true;
 }
 
+/* Is far_agreement of two ends whose far gradients are g1, g2 a number (so pair_point
+ * pairs them), known without working it out? Squared norms within 2^±900 keep the norms,
+ * their product and the dot product finite and the product nonzero. False: ask it. */
+static bool agreement_a_number(const double g1[3], const double g2[3])
+{
+    double s1 = ism_dot3(g1, g1), s2 = ism_dot3(g2, g2);
+    return s1 > 0x1p-900 && s1 < 0x1p900 && s2 > 0x1p-900 && s2 < 0x1p900;
+}
+
+/* The common node on the stack (ne ≤ FEW_ENDS): single-polygon lines only, whose ends meet
+ * two by two, each two the same bits, neither singular, their far gradients' agreement a
+ * number. The graph is then the general one's without a sort or a grouping: each point is
+ * a group of two ends, pair_point pairs them (the agreement > -1), and no point is terminal;
+ * so no chain starts at an end and every loop is closed (ism_stitch's second loop alone).
+ * False (partner possibly written) when the node is not so: the caller builds the general
+ * graph. The Klein bottle at E = 3.27e-3: every stitched leaf but a few (callgrind). */
+static bool plain_pairs(graph *g, const ism_flines *l, size_t ne)
+{
+    const ism_fpoint *ep[FEW_ENDS];
+    for (size_t k = 0; k < l->n; k++) {
+        if (l->v[k].kind != ISM_LINE_REGULAR)
+            return false;
+        ep[2 * k] = &l->v[k].a;
+        ep[2 * k + 1] = &l->v[k].b;
+    }
+    for (size_t e = 0; e < ne; e++)
+        g->partner[e] = -1;
+    for (size_t e = 0; e < ne; e++) {
+        if (g->partner[e] >= 0)
+            continue;
+        const double *p = ep[e]->p;
+        size_t f = ne;
+        for (size_t j = e + 1; j < ne; j++) { /* a NaN coordinate equals none: no partner */
+            const double *q = ep[j]->p;
+            if (q[0] == p[0] && q[1] == p[1] && q[2] == p[2]) {
+                if (f < ne)
+                    return false; /* three ends or more at one point */
+                f = j;
+            }
+        }
+        if (f == ne || memcmp(ep[f]->p, p, 3 * sizeof *p) != 0 ||
+            ((ep[e]->flags | ep[f]->flags) & ISM_FP_SINGULAR) ||
+            !(agreement_a_number(ep[e ^ 1]->g, ep[f ^ 1]->g) ||
+              far_agreement(l, (int)e, (int)f) > -1))
+            return false;
+        g->partner[e] = (int)f;
+        g->partner[f] = (int)e;
+    }
+    return true;
+}
+
 /* Sets g->heap and the four arrays first (allocated ones possibly NULL), so free_graph may
  * run whatever this returns. */
 static bool build_graph(graph *g, const ism_flines *l)
@@ -193,6 +245,7 @@ static bool build_graph(graph *g, const ism_flines *l)
     int order_in[FEW_ENDS], *order = order_in;
     const ism_fpoint *at_in[FEW_ENDS], **at = at_in; /* the ends' points, in order */
     g->l = l;
+    g->plain = false;
     g->heap = ne > FEW_ENDS;
     if (g->heap) {
         order = malloc(ne * sizeof *order);
@@ -209,8 +262,11 @@ static bool build_graph(graph *g, const ism_flines *l)
     } else {
         g->node = g->node_in;
         g->partner = g->partner_in;
-        g->terminal = memset(g->terminal_in, 0, ne * sizeof *g->terminal);
+        g->terminal = g->terminal_in;
         g->used = memset(g->used_in, 0, l->n * sizeof *g->used);
+        if ((g->plain = plain_pairs(g, l, ne)))
+            return true;
+        memset(g->terminal_in, 0, ne * sizeof *g->terminal);
     }
     for (size_t e = 0; e < ne; e++)
         g->partner[e] = -1;
@@ -304,11 +360,14 @@ static bool close_with_shared(graph *g, int from, int to, ism_loops *out, bool *
     if (from == to)
         return true;
     size_t nl = g->l->n;
-    int *via = malloc((size_t)g->npoints * sizeof *via); /* end used to reach each point */
-    int *queue = malloc((size_t)g->npoints * sizeof *queue);
+    int via_in[FEW_ENDS], queue_in[FEW_ENDS], *via = via_in, *queue = queue_in;
+    if (g->npoints > FEW_ENDS) { /* a point has an end: npoints ≤ ends, FEW_ENDS on the stack */
+        via = malloc((size_t)g->npoints * sizeof *via); /* end used to reach each point */
+        queue = malloc((size_t)g->npoints * sizeof *queue);
+    }
     if (!via || !queue) {
-        free(via);
-        free(queue);
+        if (via != via_in)
+            free(via), free(queue);
         *ok = false;
         return false;
     }
@@ -345,8 +404,8 @@ static bool close_with_shared(graph *g, int from, int to, ism_loops *out, bool *
                 *ok = *ok && push_loop_point(out, end_point(g->l, path[i] ^ 1));
         }
     }
-    free(via);
-    free(queue);
+    if (via != via_in)
+        free(via), free(queue);
     return found;
 }
 
@@ -394,7 +453,7 @@ bool ism_stitch(const ism_flines *l, ism_loops *out)
     graph g; /* build_graph sets what free_graph reads before anything can fail */
     bool ok = build_graph(&g, l);
     /* chains that start at a terminal point or a dangling end */
-    for (size_t e = 0; e < ne && ok; e++)
+    for (size_t e = 0; e < ne && ok && !g.plain; e++)
         if (!is_shared(l, (int)e) && !g.used[e >> 1] &&
             (g.terminal[g.node[e]] || g.partner[e] < 0))
             ok = stitch_chain(&g, (int)e, out);
@@ -402,7 +461,7 @@ bool ism_stitch(const ism_flines *l, ism_loops *out)
     for (size_t k = 0; k < l->n && ok; k++)
         if (!g.used[k] && l->v[k].kind == ISM_LINE_REGULAR)
             ok = stitch_chain(&g, (int)(2 * k), out);
-    if (ok)
+    if (ok && !g.plain)
         ok = leftover_shared(&g, out);
     free_graph(&g);
     return ok;

@@ -330,3 +330,85 @@ Test(stitch, nan_point_meets_its_bits)
         ism_loops_free(&out);
     }
 }
+
+/* The plain node (stitch.c plain_pairs: single-polygon lines whose ends meet two by two)
+ * stitched on its own, and again beside 6 triangles elsewhere (18 more lines: the heap's
+ * graph, which groups every node by the general rule): its loops come first either way, as
+ * the second loop of ism_stitch finds them line by line, and must be the same bits — points,
+ * gradients, flags, closed. Nodes that look plain but are not, where the general rule
+ * leaves an end unpaired: a far gradient too large (its squared norm overflows: far_agreement
+ * NaN), or infinite; and a tiny and a zero far gradient (agreement a number: paired). */
+static void plain_as_general(const char *what, lineset *s)
+{
+    cr_assert(s->n <= 16, "%s: not on the stack", what);
+    ism_flines alone = { s->v, s->n, s->n };
+    ism_loops a = { 0 }, b = { 0 };
+    cr_assert(ism_stitch(&alone, &a), "%s", what);
+    size_t n = s->n;
+    ism_flines beside = with_triangles(s, 6);
+    cr_assert(ism_stitch(&beside, &b), "%s", what);
+    s->n = n;
+    cr_assert_eq(b.nloops, a.nloops + 6, "%s: %zu loops beside, %zu alone", what, b.nloops,
+                 a.nloops);
+    for (size_t i = 0; i < a.nloops; i++) {
+        const ism_loop *la = &a.loops[i], *lb = &b.loops[i];
+        cr_expect(la->n == lb->n && la->closed == lb->closed, "%s: loop %zu differs", what, i);
+        for (size_t j = 0; j < la->n && la->n == lb->n; j++) {
+            const ism_fpoint *p = &a.pts[la->first + j], *q = &b.pts[lb->first + j];
+            cr_expect(memcmp(p->p, q->p, sizeof p->p) == 0 && memcmp(p->g, q->g, sizeof p->g) == 0
+                          && p->flags == q->flags,
+                      "%s: loop %zu point %zu differs", what, i, j);
+        }
+    }
+    ism_loops_free(&a);
+    ism_loops_free(&b);
+}
+
+/* A pentagon and a square (normal z), flipped and shuffled by add_line and shuffle; the
+ * pentagon's corners in `odd` (a bit each) take the gradient g, the far gradient of their
+ * neighbours' ends. want_open: the open chains (by hand: the points whose two ends
+ * far_agreement leaves unpaired cut the pentagon there, and a chain whose two ends meet at
+ * one point is closed there, that point twice); want_pts: the points of all loops. */
+static void plain_case(const char *what, unsigned odd, const double g[3], size_t want_open,
+                       size_t want_pts)
+{
+    ism_fpoint pent[5], sq[4];
+    const double c1[3] = { 0.25, -0.5, 0.125 }, c2[3] = { 3, 3, 0.125 };
+    circle(pent, 5, c1, 0, 1, NZ);
+    circle(sq, 4, c2, 0, 1, NZ);
+    for (int i = 0; i < 5; i++)
+        if (odd >> i & 1)
+            memcpy(pent[i].g, g, sizeof pent[i].g);
+    lineset s = { .n = 0 };
+    for (int i = 0; i < 5; i++)
+        add_line(&s, pent[i], pent[(i + 1) % 5], ISM_LINE_REGULAR);
+    for (int i = 0; i < 4; i++)
+        add_line(&s, sq[i], sq[(i + 1) % 4], ISM_LINE_REGULAR);
+    shuffle(&s, 5u);
+    ism_flines l = { s.v, s.n, s.n };
+    ism_loops out = { 0 };
+    cr_assert(ism_stitch(&l, &out), "%s", what);
+    size_t open = 0, pts = 0;
+    for (size_t i = 0; i < out.nloops; i++)
+        open += !out.loops[i].closed, pts += out.loops[i].n;
+    cr_expect_eq(open, want_open, "%s: %zu open chains", what, open);
+    cr_expect_eq(pts, want_pts, "%s: %zu points", what, pts);
+    ism_loops_free(&out);
+    plain_as_general(what, &s);
+}
+
+Test(stitch, plain_nodes_stitch_as_the_general_graph)
+{
+    const double big[3] = { 0, 0, 1e200 }, inf[3] = { INFINITY, 0, 0 };
+    const double tiny[3] = { 1e-160, 0, 0 }, zero[3] = { 0, 0, 0 };
+    plain_case("plain", 0, NZ, 0, 9);
+    /* corners 0 and 2 at 1e200 along z: at corner 1 their dot product and norms are
+     * infinite, inf / inf: the pentagon one chain from corner 1 round to corner 1 (6) */
+    plain_case("far gradients 1e200", 1u << 0 | 1u << 2, big, 0, 10);
+    /* corner 2 infinite along x: inf × 0 at corners 1 and 3: two open chains, 1-2-3 and
+     * 3-4-0-1 */
+    plain_case("far gradient inf", 1u << 2, inf, 2, 11);
+    /* squared norms below 2^-900 (agreement_a_number says no) or 0: still paired */
+    plain_case("far gradient 1e-160", 1u << 2, tiny, 0, 9);
+    plain_case("far gradient 0", 1u << 2, zero, 0, 9);
+}
