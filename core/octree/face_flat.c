@@ -29,13 +29,16 @@ int ism_face_plane(const double node[6], const ism_fpoint *p, size_t n)
     return -1;
 }
 
-bool ism_in_one_face(const double node[6], const double a[3], const double b[3],
-                     const double c[3])
+void ism_face_masks(const double node[6], const ism_fpoint *p, size_t n, uint8_t *mask)
 {
-    for (int face = 0; face < 6; face++)
-        if (on_plane(node, face, a) && on_plane(node, face, b) && on_plane(node, face, c))
-            return true;
-    return false;
+    for (size_t i = 0; i < n; i++) {
+        const double *q = p[i].p;
+        unsigned m = 0; /* on_plane of faces 2a (lower) and 2a + 1 (upper) */
+        for (int a = 0; a < 3; a++)
+            m |= (unsigned)(q[a] == node[a]) << 2 * a |
+                 (unsigned)(q[a] == node[3 + a]) << (2 * a + 1);
+        mask[i] = (uint8_t)m;
+    }
 }
 
 /* The first zero of f on the way from `from` along `axis` to the coordinate `to` (reached

@@ -24,9 +24,9 @@
  * whose plane holds every point of p[0..n), or -1. */
 int ism_face_plane(const double node[6], const ism_fpoint *p, size_t n);
 
-/* Do a, b and c all lie in the plane of one face of the node box? */
-bool ism_in_one_face(const double node[6], const double a[3], const double b[3],
-                     const double c[3]);
+/* The faces of the node box whose planes hold p[i], into mask[i] (i < n): bit `face` set
+ * for each. Points lie in the plane of one face together when their masks share a bit. */
+void ism_face_masks(const double node[6], const ism_fpoint *p, size_t n, uint8_t *mask);
 
 /* The point of f = 0 on the segment from the centroid of p[0..n) (all in face `face`)
  * straight into the node, up to its far side: the first sign change of f along it, by

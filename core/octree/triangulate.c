@@ -15,15 +15,20 @@
 #include <string.h>
 
 /* A point's gradient as ism_normalise3 leaves it, and whether it counts toward a mean unit
- * gradient (its norm > 0): each polygon's points are normalised once, and every test that
- * sums unit gradients (reversed, tri_agreement) reads them in its own order. */
+ * gradient (its norm > 0): unit_gradient is the one place a gradient is normalised; each
+ * polygon's points are normalised once, and every test that sums unit gradients (reversed,
+ * tri_agreement_u, clip_ears) reads them in its own order. */
 typedef struct unit_g {
     double u[3];
     bool ok;
 } unit_g;
 
-/* Polygons of up to this many points keep their unit gradients on the stack; a larger one
- * (a coarse node's face crossed by finer neighbours' tiles) normalises them as it goes. */
+/* Polygons of up to this many points keep what their triangulation works out per point
+ * (struct polygon: unit gradients, faces, and the n × n distances, 8 KiB at 32) on the
+ * stack; a larger one (a coarse node's face crossed by finer neighbours' tiles) allocates
+ * it. 32: a loop has no more points than its node has lines, and stitch.c keeps a node of
+ * up to FEW_ENDS = 32 ends (16 lines) on its stack too; no polygon of the issue's rows
+ * passes it (callgrind line counts of the allocating branches). */
 #define UNIT_STACK 32
 
 static void unit_gradient(const ism_fpoint *p, unit_g *ug)
@@ -193,39 +198,113 @@ static bool centre_point(ism_sampler *s, const ism_fpoint *p, size_t n, double r
     return true;
 }
 
-static double min_angle_cos(const double *a, const double *b, const double *c)
+/* A polygon as emitted (its points out->verts[base ..], in the emitted order) and what its
+ * triangulation asks of its points again and again, worked out once: their unit
+ * gradients, the faces of the node each lies in, and (for the fans from its corners) the
+ * distances between them. */
+typedef struct polygon {
+    const ism_fpoint *q;
+    size_t n;
+    unit_g *u;      /* q[i]'s unit gradient */
+    uint8_t *faces; /* q[i]'s ism_face_mask (0 without a node: no face then) */
+    double *len;    /* n × n: |q[i] − q[j]| (ism_dist3, the same bits either way round) */
+    double *ear;    /* min_angle_cos of q[j − 1], q[j], q[j + 1]: the first and last triangles
+                       of the fans from q[j + 1] and q[j − 1], measured once */
+    bool has_len;   /* len and ear are filled in (polygon_lengths) */
+} polygon;
+
+/* The cosine of the angle between sides of lengths nu, nw whose dot product is uw (1 at a
+ * degenerate side). */
+static double corner_cos(double uw, double nu, double nw)
 {
-    const double *v[3] = {a, b, c};
-    double worst = -1;
-    for (int k = 0; k < 3; k++) {
-        const double *o = v[k], *p = v[(k + 1) % 3], *q = v[(k + 2) % 3];
-        double u[3] = {p[0] - o[0], p[1] - o[1], p[2] - o[2]};
-        double w[3] = {q[0] - o[0], q[1] - o[1], q[2] - o[2]};
-        double nu = ism_norm3(u), nw = ism_norm3(w);
-        double cs = nu > 0 && nw > 0 ? ism_dot3(u, w) / (nu * nw) : 1;
-        if (cs > worst)
-            worst = cs;
+    return nu > 0 && nw > 0 ? uw / (nu * nw) : 1;
+}
+
+/* The cosine of the smallest angle of triangle a, b, c (larger is worse; an angle at a
+ * degenerate side counts 1), its sides side[k] = |v[k + 1] − v[k]| (v = a, b, c) given.
+ * Each angle's cosine is that of its two sides leaving its corner, u · w / (|u| |w|): with
+ * the sides e[k] = v[k + 1] − v[k], the corner v[k] has u = e[k] and w = −e[k + 2], and
+ * u · w = −(e[k] · e[k + 2]) (a difference turned round, and a sum of products turned
+ * round, only change sign: the same number, but for the sign of a zero, which no
+ * comparison sees). The same for b, c, a: the measure does not depend on the corner the
+ * triangle starts from. */
+static double min_angle_cos(const double *a, const double *b, const double *c,
+                            const double side[3])
+{
+    const double e0[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    const double e1[3] = {c[0] - b[0], c[1] - b[1], c[2] - b[2]};
+    const double e2[3] = {a[0] - c[0], a[1] - c[1], a[2] - c[2]};
+    double c0 = corner_cos(-ism_dot3(e0, e2), side[0], side[2]);
+    double c1 = corner_cos(-ism_dot3(e1, e0), side[1], side[0]);
+    double c2 = corner_cos(-ism_dot3(e2, e1), side[2], side[1]);
+    double worst = -1; /* the largest, in corner order (a NaN is never taken) */
+    worst = c0 > worst ? c0 : worst;
+    worst = c1 > worst ? c1 : worst;
+    return c2 > worst ? c2 : worst;
+}
+
+/* min_angle_cos of the polygon's triangle q[a], q[b], q[c] (pg->len filled in). */
+static double tri_cos(const polygon *pg, size_t a, size_t b, size_t c)
+{
+    size_t n = pg->n;
+    const double side[3] = {pg->len[a * n + b], pg->len[b * n + c], pg->len[c * n + a]};
+    return min_angle_cos(pg->q[a].p, pg->q[b].p, pg->q[c].p, side);
+}
+
+/* Fills in pg->len and pg->ear once. ism_dist3(a, b) squares a − b, whose terms are those of
+ * b − a but for their signs: every pair's distance is the one ism_norm3 gives either way
+ * round. */
+static void polygon_lengths(polygon *pg)
+{
+    if (pg->has_len)
+        return;
+    size_t n = pg->n;
+    for (size_t i = 0; i < n; i++) {
+        pg->len[i * n + i] = 0;
+        for (size_t j = i + 1; j < n; j++)
+            pg->len[i * n + j] = pg->len[j * n + i] = ism_dist3(pg->q[i].p, pg->q[j].p);
     }
-    return worst; /* cos of the smallest angle: larger is worse */
+    for (size_t j = 0; j < n; j++)
+        pg->ear[j] = tri_cos(pg, (j + n - 1) % n, j, (j + 1) % n);
+    pg->has_len = true;
+}
+
+/* The faces of the node p lies in (ism_face_masks; none without a node). */
+static unsigned point_faces(const double node[6], const ism_fpoint *p)
+{
+    uint8_t mask = 0;
+    if (node)
+        ism_face_masks(node, p, 1, &mask);
+    return mask;
+}
+
+/* Do the polygon's points a, b, c lie in one face of the node? */
+static bool tri_in_face(const polygon *pg, size_t a, size_t b, size_t c)
+{
+    return (pg->faces[a] & pg->faces[b] & pg->faces[c]) != 0;
+}
+
+/* g += u's unit gradient when it counts (u->ok). */
+static void add_unit(double g[3], const unit_g *u)
+{
+    if (u->ok)
+        for (int k = 0; k < 3; k++)
+            g[k] += u->u[k];
 }
 
 /* Triangle a, b, c's normal against the mean unit gradient at its corners (their unit
- * gradients ua, ub, uc): > 0 when it keeps the surface's orientation, < 0 when it is turned
- * over, 0 when degenerate. */
+ * gradients ua, ub, uc, added in that order): > 0 when it keeps the surface's orientation,
+ * < 0 when it is turned over, 0 when degenerate. */
 static double tri_agreement_u(const ism_fpoint *a, const ism_fpoint *b, const ism_fpoint *c,
                               const unit_g *ua, const unit_g *ub, const unit_g *uc)
 {
-    const unit_g *v[3] = {ua, ub, uc};
-    double e1[3], e2[3], nrm[3], g[3] = {0, 0, 0};
-    for (int k = 0; k < 3; k++) {
-        e1[k] = b->p[k] - a->p[k];
-        e2[k] = c->p[k] - a->p[k];
-    }
+    const double e1[3] = {b->p[0] - a->p[0], b->p[1] - a->p[1], b->p[2] - a->p[2]};
+    const double e2[3] = {c->p[0] - a->p[0], c->p[1] - a->p[1], c->p[2] - a->p[2]};
+    double nrm[3], g[3] = {0, 0, 0};
     ism_cross3(e1, e2, nrm);
-    for (int j = 0; j < 3; j++)
-        if (v[j]->ok)
-            for (int k = 0; k < 3; k++)
-                g[k] += v[j]->u[k];
+    add_unit(g, ua);
+    add_unit(g, ub);
+    add_unit(g, uc);
     return ism_dot3(nrm, g);
 }
 
@@ -239,73 +318,68 @@ static double tri_agreement(const ism_fpoint *a, const ism_fpoint *b, const ism_
     return tri_agreement_u(a, b, c, &ua, &ub, &uc);
 }
 
-/* The unit gradient of q[i] (units[i] when units is not NULL, else computed into *tmp). */
-static const unit_g *unit_of(const ism_fpoint *q, const unit_g *units, size_t i, unit_g *tmp)
+/* Does the fan of the polygon (wound to agree with ∇f) around apex — one of its corners or
+ * a point off it, whose unit gradient is uapex — hold a turned-over triangle? A fan from a
+ * corner of a polygon that is not star-shaped from it (a reflex corner across, as where the
+ * polygon runs along a node's face) folds back: the sphere at E = 2e-3, depth 8, box 0.37
+ * cell off the lattice had 4. */
+static bool fan_folds(const polygon *pg, const ism_fpoint *apex, const unit_g *uapex)
 {
-    if (units)
-        return &units[i];
-    unit_gradient(&q[i], tmp);
-    return tmp;
-}
-
-/* Does the fan of q[0..n) (wound to agree with ∇f) around apex — one of its corners or a
- * point off it — hold a turned-over triangle? A fan from a corner of a polygon that is not
- * star-shaped from it (a reflex corner across, as where the polygon runs along a node's
- * face) folds back: the sphere at E = 2e-3, depth 8, box 0.37 cell off the lattice had 4. */
-static bool fan_folds(const ism_fpoint *q, const unit_g *units, size_t n, const ism_fpoint *apex,
-                      const unit_g *uapex)
-{
+    const ism_fpoint *q = pg->q;
+    size_t n = pg->n;
     for (size_t i = 0; i < n; i++) {
-        const ism_fpoint *a = &q[i], *b = &q[(i + 1) % n];
-        if (a == apex || b == apex)
+        size_t j = (i + 1) % n;
+        if (&q[i] == apex || &q[j] == apex)
             continue;
-        unit_g ta, tb;
-        const unit_g *ua = unit_of(q, units, i, &ta), *ub = unit_of(q, units, (i + 1) % n, &tb);
-        if (tri_agreement_u(apex, a, b, uapex, ua, ub) < 0)
+        if (tri_agreement_u(apex, &q[i], &q[j], uapex, &pg->u[i], &pg->u[j]) < 0)
             return true;
     }
     return false;
 }
 
-/* Does the fan of out->verts[base .. base + n) around vertex `apex` hold a triangle lying in
- * one of the node's faces (which the node across it may emit as well)? Never without node. */
-static bool fan_in_face(const ism_cell_out *out, size_t base, size_t n, const double *apex,
-                        const double node[6])
+/* Does the fan of the polygon around `apex` (one of its corners or a point off it, in the
+ * node's faces apex_faces) hold a triangle lying in one of the node's faces (which the node
+ * across it may emit as well)? Never without a node (no faces). */
+static bool fan_in_face(const polygon *pg, const double *apex, unsigned apex_faces)
 {
-    const ism_fpoint *q = out->verts + base;
-    for (size_t i = 0; node && i < n; i++)
-        if (q[i].p != apex && q[(i + 1) % n].p != apex && /* a corner's own two edges */
-            ism_in_one_face(node, apex, q[i].p, q[(i + 1) % n].p))
+    const ism_fpoint *q = pg->q;
+    size_t n = pg->n;
+    for (size_t i = 0; apex_faces && i < n; i++) {
+        size_t j = (i + 1) % n;
+        if (q[i].p != apex && q[j].p != apex && /* a corner's own two edges */
+            (apex_faces & pg->faces[i] & pg->faces[j]))
             return true;
+    }
     return false;
 }
 
 /* The corner whose fan has the largest smallest angle, among the corners whose fan has no
  * turned-over triangle nor one lying in a face of the node (else the fewest such faults:
  * a fold before a face triangle); *in_face: the chosen fan has one of them; *folds: it has
- * a turned-over triangle (fan_folds). units: the polygon's unit gradients, or NULL. */
-static size_t best_corner(const ism_cell_out *out, size_t base, size_t n, const double node[6],
-                          const unit_g *units, bool *in_face, bool *folds)
+ * a turned-over triangle (fan_folds). */
+static size_t best_corner(polygon *pg, bool *in_face, bool *folds)
 {
-    const ism_fpoint *q = out->verts + base;
-    size_t best = 0;
+    const ism_fpoint *q = pg->q;
+    size_t n = pg->n, best = 0;
     bool best_folds = false;
     double best_cos = HUGE_VAL; /* cos + 1 (face) + 2 (fold) may pass 3 */
+    polygon_lengths(pg);
     for (size_t c = 0; c < n; c++) {
         /* a fan measured no better than the best so far is never chosen, and its faults
          * only add: the rest of its measure is skipped (the choice is the full measure's) */
         double worst = -1;
         for (size_t i = 1; i + 1 < n && worst < best_cos; i++) {
-            double w = min_angle_cos(q[c].p, q[(c + i) % n].p, q[(c + i + 1) % n].p);
+            double w = i == 1       ? pg->ear[(c + 1) % n]     /* c, c + 1, c + 2 */
+                       : i == n - 2 ? pg->ear[(c + n - 1) % n] /* c, c − 2, c − 1 */
+                                    : tri_cos(pg, c, (c + i) % n, (c + i + 1) % n);
             if (w > worst)
                 worst = w;
         }
-        if (worst < best_cos && fan_in_face(out, base, n, q[c].p, node))
+        if (worst < best_cos && fan_in_face(pg, q[c].p, pg->faces[c]))
             worst += 1; /* only when every corner's fan has one */
         if (!(worst < best_cos))
             continue;
-        unit_g tc;
-        bool f = fan_folds(q, units, n, &q[c], unit_of(q, units, c, &tc));
+        bool f = fan_folds(pg, &q[c], &pg->u[c]);
         if (f)
             worst += 2; /* only when every corner's fan folds */
         if (worst < best_cos)
@@ -353,21 +427,21 @@ static bool in_ear(const double p[2], const double a[2], const double b[2], cons
  * lying in none of the node's faces when one such exists. *emitted false (nothing emitted)
  * when no ear is left at some step: the caller fans from its best corner; false out of
  * memory. */
-static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double node[6],
-                      bool *emitted)
+static bool clip_ears(ism_cell_out *out, size_t base, polygon *pg, bool *emitted)
 {
     *emitted = false;
-    const ism_fpoint *q = out->verts + base;
+    const ism_fpoint *q = pg->q;
+    const unit_g *ug = pg->u;
+    size_t n = pg->n;
     double nrm[3] = {0, 0, 0}, e[2][3];
-    for (size_t i = 0; i < n; i++) {
-        double u[3] = {q[i].g[0], q[i].g[1], q[i].g[2]};
-        if (ism_normalise3(u) > 0)
+    for (size_t i = 0; i < n; i++)
+        if (ug[i].ok)
             for (int k = 0; k < 3; k++)
-                nrm[k] += u[k];
-    }
+                nrm[k] += ug[i].u[k];
     if (!(ism_normalise3(nrm) > 0))
         return true;
     ism_across_least3(nrm, e); /* (e[0], e[1], nrm) right-handed */
+    polygon_lengths(pg);
     double (*uv)[2] = malloc(n * sizeof *uv);
     size_t *left = malloc(n * sizeof *left);
     bool ok = uv && left;
@@ -383,7 +457,8 @@ static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double nod
         double best_score = HUGE_VAL;
         for (size_t i = 0; i < m; i++) {
             size_t a = left[(i + m - 1) % m], b = left[i], c = left[(i + 1) % m];
-            if (!(area2(uv[a], uv[b], uv[c]) > 0) || !(tri_agreement(&q[a], &q[b], &q[c]) > 0))
+            if (!(area2(uv[a], uv[b], uv[c]) > 0) ||
+                !(tri_agreement_u(&q[a], &q[b], &q[c], &ug[a], &ug[b], &ug[c]) > 0))
                 continue;
             bool empty = true;
             for (size_t j = 0; j < m && empty; j++)
@@ -391,8 +466,7 @@ static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double nod
                     empty = !in_ear(uv[left[j]], uv[a], uv[b], uv[c]);
             if (!empty)
                 continue;
-            double score = min_angle_cos(q[a].p, q[b].p, q[c].p) +
-                           (node && ism_in_one_face(node, q[a].p, q[b].p, q[c].p) ? 2 : 0);
+            double score = tri_cos(pg, a, b, c) + (tri_in_face(pg, a, b, c) ? 2 : 0);
             if (score < best_score)
                 best_score = score, best = i;
         }
@@ -415,18 +489,17 @@ static bool clip_ears(ism_cell_out *out, size_t base, size_t n, const double nod
 }
 
 /* The fan from the best corner — or, when that fan folds, the polygon's ears (clip_ears). */
-static bool fan_from_best_corner(ism_cell_out *out, size_t base, size_t n, const double node[6],
-                                 const unit_g *units)
+static bool fan_from_best_corner(ism_cell_out *out, size_t base, polygon *pg)
 {
     bool in_face, folds, emitted;
-    size_t c = best_corner(out, base, n, node, units, &in_face, &folds);
+    size_t c = best_corner(pg, &in_face, &folds);
     if (folds) {
-        if (!clip_ears(out, base, n, node, &emitted))
+        if (!clip_ears(out, base, pg, &emitted))
             return false;
         if (emitted)
             return true;
     }
-    return fan_from_corner(out, base, n, c);
+    return fan_from_corner(out, base, pg->n, c);
 }
 
 /* The largest distance to f = 0 at the centroids of the fan of q[0..n) from corner c and at
@@ -457,24 +530,64 @@ static double corner_fan_error(ism_sampler *s, const ism_fpoint *q, size_t n, si
  * measures within the bound; false (and nothing emitted) when it does not. The sphere at
  * E = 7.9e-4 (box ±1.5): 21,224 -> 17,192 triangles, max centroid distance 6.5e-4 -> 6.7e-4;
  * the gyroid ball at 0.0334: 22,612 -> 17,236. */
-static bool corner_fan_within(ism_sampler *s, ism_cell_out *out, size_t base, size_t n,
-                              const double node[6], double max_error, const unit_g *units,
-                              bool *emitted)
+static bool corner_fan_within(ism_sampler *s, ism_cell_out *out, size_t base, polygon *pg,
+                              double max_error, bool *emitted)
 {
     *emitted = false;
     bool in_face, folds;
-    size_t c = best_corner(out, base, n, node, units, &in_face, &folds);
-    if (in_face || corner_fan_error(s, out->verts + base, n, c, max_error) > max_error)
+    size_t c = best_corner(pg, &in_face, &folds);
+    if (in_face || corner_fan_error(s, pg->q, pg->n, c, max_error) > max_error)
         return true;
     *emitted = true;
-    return fan_from_corner(out, base, n, c);
+    return fan_from_corner(out, base, pg->n, c);
 }
 
-/* fan_folds of the quad q from its corner c. */
-static bool quad_folds(const ism_fpoint *q, const unit_g *units, size_t c)
+/* A quadrilateral along its shorter diagonal, unless that leaves a triangle lying in a face
+ * of the node or the fan along it folds where the other's does not (a quad not convex: the
+ * other diagonal keeps the orientation). */
+static bool split_quad(ism_cell_out *out, uint32_t b, const polygon *pg)
 {
-    unit_g tc;
-    return fan_folds(q, units, 4, &q[c], unit_of(q, units, c, &tc));
+    const ism_fpoint *q = pg->q;
+    bool first = ism_dist3(q[0].p, q[2].p) <= ism_dist3(q[1].p, q[3].p);
+    if (tri_in_face(pg, 0, 1, 2) || tri_in_face(pg, 0, 2, 3))
+        first = false;
+    else if (tri_in_face(pg, 1, 2, 3) || tri_in_face(pg, 1, 3, 0))
+        first = true;
+    else if (fan_folds(pg, &q[first ? 0 : 1], &pg->u[first ? 0 : 1]) &&
+             !fan_folds(pg, &q[first ? 1 : 0], &pg->u[first ? 1 : 0]))
+        first = !first;
+    if (first)
+        return ism_cell_out_tri(out, b, b + 1, b + 2) && ism_cell_out_tri(out, b, b + 2, b + 3);
+    return ism_cell_out_tri(out, b + 1, b + 2, b + 3) && ism_cell_out_tri(out, b + 1, b + 3, b);
+}
+
+/* A polygon of four or more points, emitted at base: split, fanned from a corner under the
+ * error bound, fanned from its centre, or else from its best corner. */
+static bool triangulate_polygon(ism_sampler *s, ism_cell_out *out, size_t base, polygon *pg,
+                                double reach, const double node[6], double max_error)
+{
+    uint32_t b = (uint32_t)base;
+    size_t n = pg->n;
+    if (n == 4)
+        return split_quad(out, b, pg);
+    bool emitted = false;
+    if (max_error > 0 && !corner_fan_within(s, out, base, pg, max_error, &emitted))
+        return false;
+    if (emitted)
+        return true;
+    ism_fpoint c;
+    unit_g uc;
+    if (!centre_point(s, pg->q, n, reach, node, &c) ||
+        fan_in_face(pg, c.p, point_faces(node, &c)) ||
+        (unit_gradient(&c, &uc), fan_folds(pg, &c, &uc)))
+        return fan_from_best_corner(out, base, pg);
+    uint32_t ci;
+    if (!ism_cell_out_vert(out, &c, &ci)) /* pg->q is not read again: this may move it */
+        return false;
+    for (size_t i = 0; i < n; i++)
+        if (!ism_cell_out_tri(out, ci, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
+            return false;
+    return true;
 }
 
 bool ism_loop_reversed(ism_sampler *s, const double node[6], const ism_fpoint *pts, size_t n)
@@ -489,12 +602,16 @@ static bool wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
 bool ism_triangulate_loop(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                           const double node[6], double max_error, ism_cell_out *out)
 {
-    if (n < 3 || n > UNIT_STACK)
-        return ism_triangulate_wound(s, pts, n, reach, node, max_error,
-                                     ism_loop_reversed(s, node, pts, n), out);
-    unit_g units[UNIT_STACK];
+    if (n < 3)
+        return true;
+    unit_g units_in[UNIT_STACK], *units = units_in;
+    if (n > UNIT_STACK && !(units = malloc(n * sizeof *units)))
+        return false;
     bool flip = reversed(s, node, pts, n, units);
-    return wound(s, pts, n, reach, node, max_error, flip, units, out);
+    bool ok = wound(s, pts, n, reach, node, max_error, flip, units, out);
+    if (units != units_in)
+        free(units);
+    return ok;
 }
 
 bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
@@ -503,8 +620,8 @@ bool ism_triangulate_wound(ism_sampler *s, const ism_fpoint *pts, size_t n, doub
     return wound(s, pts, n, reach, node, max_error, flip, NULL, out);
 }
 
-/* ism_triangulate_wound, with pts' unit gradients in pts_units (pts' order; NULL: each
- * normalised where it is needed, n ≤ UNIT_STACK when not NULL). */
+/* ism_triangulate_wound, with pts' unit gradients in pts_units (pts' order; NULL: worked
+ * out here). */
 static bool wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
                   const double node[6], double max_error, bool flip, const unit_g *pts_units,
                   ism_cell_out *out)
@@ -517,47 +634,37 @@ static bool wound(ism_sampler *s, const ism_fpoint *pts, size_t n, double reach,
     uint32_t b = (uint32_t)base;
     if (n == 3)
         return ism_cell_out_tri(out, b, b + 1, b + 2);
-    unit_g units_in[UNIT_STACK], *units = NULL; /* in the emitted order, as out_polygon's */
-    if (pts_units) {
-        units = units_in;
-        for (size_t i = 0; i < n; i++)
-            units[i] = pts_units[flip ? n - 1 - i : i];
+    unit_g u_in[UNIT_STACK];
+    uint8_t faces_in[UNIT_STACK];
+    double len_in[UNIT_STACK * UNIT_STACK], ear_in[UNIT_STACK];
+    polygon pg = {out->verts + base, n, u_in, faces_in, len_in, ear_in, false};
+    bool heap = n > UNIT_STACK;
+    if (heap) {
+        pg.u = malloc(n * sizeof *pg.u);
+        pg.faces = malloc(n * sizeof *pg.faces);
+        pg.len = malloc(n * n * sizeof *pg.len);
+        pg.ear = malloc(n * sizeof *pg.ear);
     }
-    if (n == 4) {
-        /* along the shorter diagonal, unless that leaves a triangle lying in a face */
-        const ism_fpoint *q = out->verts + base;
-        bool first = ism_dist3(q[0].p, q[2].p) <= ism_dist3(q[1].p, q[3].p);
-        if (node && (ism_in_one_face(node, q[0].p, q[1].p, q[2].p) ||
-                     ism_in_one_face(node, q[0].p, q[2].p, q[3].p)))
-            first = false;
-        else if (node && (ism_in_one_face(node, q[1].p, q[2].p, q[3].p) ||
-                          ism_in_one_face(node, q[1].p, q[3].p, q[0].p)))
-            first = true;
-        else if (quad_folds(q, units, first ? 0 : 1) && !quad_folds(q, units, first ? 1 : 0))
-            first = !first; /* a quad not convex: the other diagonal keeps the orientation */
-        if (first)
-            return ism_cell_out_tri(out, b, b + 1, b + 2) && ism_cell_out_tri(out, b, b + 2, b + 3);
-        return ism_cell_out_tri(out, b + 1, b + 2, b + 3) && ism_cell_out_tri(out, b + 1, b + 3, b);
+    bool ok = pg.u && pg.faces && pg.len && pg.ear;
+    if (ok) {
+        for (size_t i = 0; i < n; i++) /* in the emitted order, as out_polygon's */
+            if (pts_units)
+                pg.u[i] = pts_units[flip ? n - 1 - i : i];
+            else
+                unit_gradient(&pg.q[i], &pg.u[i]);
+        if (node)
+            ism_face_masks(node, pg.q, n, pg.faces);
+        else
+            memset(pg.faces, 0, n * sizeof *pg.faces);
     }
-    bool emitted = false;
-    if (max_error > 0 &&
-        !corner_fan_within(s, out, base, n, node, max_error, units, &emitted))
-        return false;
-    if (emitted)
-        return true;
-    ism_fpoint c;
-    unit_g uc;
-    if (!centre_point(s, out->verts + base, n, reach, node, &c) ||
-        fan_in_face(out, base, n, c.p, node) ||
-        (unit_gradient(&c, &uc), fan_folds(out->verts + base, units, n, &c, &uc)))
-        return fan_from_best_corner(out, base, n, node, units);
-    uint32_t ci;
-    if (!ism_cell_out_vert(out, &c, &ci))
-        return false;
-    for (size_t i = 0; i < n; i++)
-        if (!ism_cell_out_tri(out, ci, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
-            return false;
-    return true;
+    ok = ok && triangulate_polygon(s, out, base, &pg, reach, node, max_error);
+    if (heap) {
+        free(pg.u);
+        free(pg.faces);
+        free(pg.len);
+        free(pg.ear);
+    }
+    return ok;
 }
 
 static bool fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex, bool flip,
