@@ -42,17 +42,19 @@ static void unit_normal(const double g[3], float n[3])
         n[k] = len > 0 ? (float)(s[k] / len) : 0.0f; /* NaN len: no normal */
 }
 
+/* A position's hash: one multiply per coordinate's bits, their high halves folded into the
+ * low (the slot: h & mask; the tag: h's high half). The tables only map positions to
+ * numbers, so the hash decides no vertex, only how far a probe runs. */
 static uint64_t hash_point(const double p[3])
 {
-    uint64_t h = 0x9e3779b97f4a7c15ull;
+    uint64_t b[3];
     for (int k = 0; k < 3; k++) {
-        uint64_t b;
         double v = p[k] == 0 ? 0.0 : p[k]; /* -0.0 and 0.0 are one point */
-        memcpy(&b, &v, sizeof b);
-        h ^= b + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
-        h *= 0xff51afd7ed558ccdull;
+        memcpy(&b[k], &v, sizeof b[k]);
     }
-    return h ^ (h >> 33);
+    uint64_t h = b[0] * 0x9e3779b97f4a7c15ull ^ b[1] * 0xc2b2ae3d27d4eb4full ^
+                 b[2] * 0x165667b19e3779f9ull;
+    return h ^ (h >> 32);
 }
 
 static bool same_point(const double a[3], const double b[3])
