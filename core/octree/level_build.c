@@ -57,7 +57,7 @@ typedef struct level_vec {
 typedef struct level_tapes {
     ism_leaf_tapes table;
     ism_leaf_tapes_cache cache;
-    uint8_t *min_max;  /* per number: 1 + does the tape keep a min/max (0: not asked yet) */
+    uint8_t *facts;    /* per number: FACT_* bits (0: not asked yet) */
     uint32_t *leaf;    /* per number: 1 + its number in b->leaf_tapes (0: not asked yet) */
     size_t cap;
     uint32_t last;     /* the number a shortening got last (0: none yet), compared first:
@@ -71,6 +71,14 @@ typedef struct level_tapes {
  * chunk of 64 gave 3,458.3M instructions, 512 gave 3,456.4M; 128 kept (the chunk size moves
  * the total by under 0.1%). */
 #define LEVEL_CHUNK 128
+_Static_assert(LEVEL_CHUNK <= ISM_PREFETCH_MAX_NODES, "a chunk is one prefetch call");
+/* A tested node's edge roots are searched on its own shortened tape when that tape is at most
+ * this share of f's instructions, else on f's own (same roots: the prefetch's lanes run one
+ * tape a set, so more tapes mean more, emptier sets). Callgrind, one thread, ism_mesh_surface:
+ * the gyroid ball at E 1.09e-3 (its nodes inside the ball on 15 of 21 instructions)
+ * 2,244.1M -> 2,229.5M on their own tapes; Barth's sextic at E 0.0259 (18 of 20 near its
+ * surface) 1,183.6M -> 1,185.1M, so kept on f's own. */
+#define ROOTS_OWN_TAPE_SHARE 0.8
 
 /* Does ism_grow_levels decide as grow would (see above)? */
 bool ism_levels_apply(const build *b, const thread_state *th)
@@ -100,10 +108,10 @@ static bool tape_id(build *b, level_tapes *lt, const ism_tape *t, const ism_tape
     unsigned k = ism_leaf_tapes_number(&lt->table, &lt->cache, t);
     if (k && k > lt->cap) {
         size_t cap = lt->cap, c2 = lt->cap;
-        if (!ism_grow((void **)&lt->min_max, &cap, k, sizeof *lt->min_max, 64) ||
+        if (!ism_grow((void **)&lt->facts, &cap, k, sizeof *lt->facts, 64) ||
             !ism_grow((void **)&lt->leaf, &c2, k, sizeof *lt->leaf, 64))
             return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
-        memset(lt->min_max + lt->cap, 0, (cap - lt->cap) * sizeof *lt->min_max);
+        memset(lt->facts + lt->cap, 0, (cap - lt->cap) * sizeof *lt->facts);
         memset(lt->leaf + lt->cap, 0, (c2 - lt->cap) * sizeof *lt->leaf);
         lt->cap = cap < c2 ? cap : c2;
     }
@@ -111,14 +119,33 @@ static bool tape_id(build *b, level_tapes *lt, const ism_tape *t, const ism_tape
     return k ? true : ism_build_fail(b, ISM_BUILD_NO_MEMORY);
 }
 
-/* Does tape number id keep a min/max (then each child shortens its own, as in grow)? */
+/* What level_tapes.facts keeps of a tape number: asked; the tape keeps a min/max (then each
+ * child shortens its own, as in grow); its nodes' roots are searched on it
+ * (ROOTS_OWN_TAPE_SHARE). */
+enum { FACT_KNOWN = 1, FACT_MIN_MAX = 2, FACT_ROOTS_OWN = 4 };
+
+/* Tape number id's facts (id > 0). */
+static unsigned facts_of(const build *b, level_tapes *lt, uint32_t id)
+{
+    uint8_t *f = &lt->facts[id - 1];
+    if (!*f) {
+        const ism_tape *t = lt->table.v[id - 1];
+        bool own = (double)t->len <= ROOTS_OWN_TAPE_SHARE * (double)b->p->tape->len;
+        *f = (uint8_t)(FACT_KNOWN | (ism_tape_has_min_max(t) ? FACT_MIN_MAX : 0) |
+                       (own ? FACT_ROOTS_OWN : 0));
+    }
+    return *f;
+}
+
 static bool keeps_min_max(const build *b, level_tapes *lt, uint32_t id)
 {
-    if (!id)
-        return b->shortening != 0;
-    if (!lt->min_max[id - 1])
-        lt->min_max[id - 1] = (uint8_t)(1 + ism_tape_has_min_max(lt->table.v[id - 1]));
-    return lt->min_max[id - 1] == 2;
+    return id ? (facts_of(b, lt, id) & FACT_MIN_MAX) != 0 : b->shortening != 0;
+}
+
+/* The tape the edge roots of a node tested on tape number id are searched on. */
+static const ism_tape *roots_tape(const build *b, level_tapes *lt, uint32_t id)
+{
+    return id && (facts_of(b, lt, id) & FACT_ROOTS_OWN) ? tape_at(b, lt, id) : b->p->tape;
 }
 
 /* A leaf's number in the build's leaf_tapes (as grow's tape_number: 0 when it finds no
@@ -181,6 +208,7 @@ static bool decide_chunk(build *b, thread_state *th, level_tapes *lt, level_vec 
                          size_t from, size_t to, level_vec *next, ism_corners *corners)
 {
     const ism_node *tested[LEVEL_CHUNK];
+    const ism_tape *tapes[LEVEL_CHUNK]; /* tested[i]'s (its roots are searched on it) */
     bool have[LEVEL_CHUNK], asks[LEVEL_CHUNK]; /* asks[j - from]: node j asks the test */
     size_t nt = 0;
     for (size_t j = from; j < to; j++) {
@@ -195,14 +223,16 @@ static bool decide_chunk(build *b, thread_state *th, level_tapes *lt, level_vec 
             continue;
         }
         asks[j - from] = nd->level >= b->p->min_depth && !forced;
-        if (asks[j - from])
+        if (asks[j - from]) {
+            tapes[nt] = roots_tape(b, lt, sd->tape);
             tested[nt++] = nd;
+        }
     }
     const ism_tape *saved = th->s.tape;
-    th->s.tape = b->p->tape; /* corners on f's own tape, as node_corners reads them; a
-                                shortened tape's f is f's own inside its node (roots) */
-    ism_prefetch_nodes(&th->memo, th->corners, ISM_CORNER_MEMO_BITS, b->grid, tested, nt,
-                       &th->s, corners, have);
+    th->s.tape = b->p->tape; /* corners on f's own tape, as node_corners reads them; the
+                                roots on each node's, as cell_error.c searches them */
+    ism_prefetch_nodes(&th->memo, th->corners, ISM_CORNER_MEMO_BITS, b->grid, tested, tapes,
+                       nt, &th->s, corners, have);
     th->s.tape = saved;
     for (size_t j = from, t = 0; j < to; j++) {
         if (atomic_load(&b->failed) != ISM_BUILD_OK)
@@ -309,7 +339,7 @@ bool ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit)
     }
     if (lt) {
         ism_leaf_tapes_free(&lt->table);
-        free(lt->min_max);
+        free(lt->facts);
         free(lt->leaf);
         free(lt);
     }

@@ -16,6 +16,9 @@
 #include "core/octree/corners.h"
 #include "core/octree/octree.h"
 
+/* Nodes a call takes at most (the level build's chunk, level_build.c LEVEL_CHUNK). */
+#define ISM_PREFETCH_MAX_NODES 128
+
 /* For nodes nd[0..n): f and ∇f at their 8 corners into the corner memo (2^bits entries), as
  * octree_build.c's node_corners would find them — a point the memo holds is skipped, the
  * others evaluated together (a later point mapped to a slot taken in the same batch takes
@@ -23,9 +26,13 @@
  * slot was taken over before it was read; then the single roots cell_error.c's edge_roots
  * searches on their edges (corners of opposite sign, neither 0, of nodes whose f is finite
  * at all 8) into the root memo and its log, as a search there appends them, skipping edges
- * the memo holds: the searches in lanes (ism_regula_falsi_lanes). */
+ * the memo holds: the searches in lanes (ism_regula_falsi_lanes), node i's on tape[i] (tape
+ * NULL, or tape[i] NULL: s->tape; a tape whose f is s->tape's inside the node, as a shortened
+ * one is: a set of lanes runs one tape), the corners on s->tape. n is at most
+ * ISM_PREFETCH_MAX_NODES. */
 void ism_prefetch_nodes(const ism_node_memo *memo, ism_point_entry *table, int bits,
-                        const ism_grid *g, const ism_node *const *nd, size_t n,
-                        ism_sampler *s, ism_corners *k, bool *have);
+                        const ism_grid *g, const ism_node *const *nd,
+                        const ism_tape *const *tape, size_t n, ism_sampler *s, ism_corners *k,
+                        bool *have);
 
 #endif

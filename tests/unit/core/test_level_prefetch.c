@@ -103,7 +103,8 @@ static size_t compare(const pf_surface *surf, int placement)
         at[n] = &nodes[n];
         if (++n < CHUNK && i + 1 < side * side * side)
             continue;
-        ism_prefetch_nodes(&lanes, points, ISM_CORNER_MEMO_BITS, &g, at, n, &s, k, have);
+        ism_prefetch_nodes(&lanes, points, ISM_CORNER_MEMO_BITS, &g, at, NULL, n, &s, k,
+                           have);
         cr_assert(ism_grow((void **)&sorted, &sorted_cap, lanes_log.n + 1, sizeof *sorted, 256));
         stale += stale_slots(lanes_memo, nroots, &lanes_log, sorted);
         memcpy(read_memo, lanes_memo, nroots * sizeof *read_memo);
