@@ -77,7 +77,9 @@ _Static_assert(LEVEL_CHUNK <= ISM_PREFETCH_MAX_NODES, "a chunk is one prefetch c
  * tape a set, so more tapes mean more, emptier sets). Callgrind, one thread, ism_mesh_surface:
  * the gyroid ball at E 1.09e-3 (its nodes inside the ball on 15 of 21 instructions)
  * 2,244.1M -> 2,229.5M on their own tapes; Barth's sextic at E 0.0259 (18 of 20 near its
- * surface) 1,183.6M -> 1,185.1M, so kept on f's own. */
+ * surface) 1,183.6M -> 1,185.1M on theirs, 1,184.2M with this share (its ball's caps, on 7
+ * instructions, on theirs: the +0.6M is the choice's own cost, ~20 instructions a tested
+ * node; at E 3.89e-3 2,454.3M -> 2,455.8M). */
 #define ROOTS_OWN_TAPE_SHARE 0.8
 
 /* Does ism_grow_levels decide as grow would (see above)? */
@@ -224,15 +226,16 @@ static bool decide_chunk(build *b, thread_state *th, level_tapes *lt, level_vec 
         }
         asks[j - from] = nd->level >= b->p->min_depth && !forced;
         if (asks[j - from]) {
-            tapes[nt] = roots_tape(b, lt, sd->tape);
+            if (b->shortening)
+                tapes[nt] = roots_tape(b, lt, sd->tape);
             tested[nt++] = nd;
         }
     }
     const ism_tape *saved = th->s.tape;
     th->s.tape = b->p->tape; /* corners on f's own tape, as node_corners reads them; the
                                 roots on each node's, as cell_error.c searches them */
-    ism_prefetch_nodes(&th->memo, th->corners, ISM_CORNER_MEMO_BITS, b->grid, tested, tapes,
-                       nt, &th->s, corners, have);
+    ism_prefetch_nodes(&th->memo, th->corners, ISM_CORNER_MEMO_BITS, b->grid, tested,
+                       b->shortening ? tapes : NULL, nt, &th->s, corners, have);
     th->s.tape = saved;
     for (size_t j = from, t = 0; j < to; j++) {
         if (atomic_load(&b->failed) != ISM_BUILD_OK)
