@@ -4,6 +4,7 @@
 #include "core/eval/interval_eval.h"
 #include "core/eval/avx2_clone.h"
 #include "core/eval/interval_ops.h"
+#include "core/eval/interval_trig.h"
 #include "core/eval/threaded.h"
 #include "core/eval/workspace.h"
 
@@ -21,22 +22,6 @@ static uint8_t min_choice(ism_interval a, ism_interval b)
 static uint8_t max_choice(ism_interval a, ism_interval b)
 {
     return a.lo > b.hi ? ONLY_A : b.lo > a.hi ? ONLY_B : BOTH;
-}
-
-/* sin or cos over a: the bounds' sines and cosines as libm's pairs from the workspace's memo
- * (trig_pair.h's second table: bit for bit what sin and cos return, as every interval
- * evaluator's iv_sin and iv_cos take), so the gyroid's sin x and cos x of one box cost one
- * sincos per bound. glibc's documented error (at most 1 ulp) under iv_sin_at's widening by
- * 4 ulp keeps the bounds sound; the point evaluators' own pairs (sincos.h) have a measured
- * bound, not a proven one. */
-static ism_interval trig_op(int op, ism_interval a, ism_trig_cache *trig)
-{
-    if (!iv_trig_resolves(a))
-        return iv(-1.0, 1.0);
-    double s1, c1, s2, c2;
-    ism_trig_pair_libm(trig, a.lo, &s1, &c1);
-    ism_trig_pair_libm(trig, a.hi, &s2, &c2);
-    return op == ISM_OP_SIN ? iv_sin_at(a, s1, s2) : iv_cos_at(a, c1, c2);
 }
 
 /* Every operation's interval, as an expression in A (its first operand's interval), B (its
@@ -64,8 +49,8 @@ static ism_interval trig_op(int op, ism_interval a, ism_trig_cache *trig)
     X(ISM_OP_POWI, iv_powi(A, in->b))                                                       \
     X(ISM_OP_POWC, iv_powc(A, C))                                                           \
     X(ISM_OP_SQRT, iv_sqrt(A))                                                              \
-    X(ISM_OP_SIN, trig_op(ISM_OP_SIN, A, trig))                                             \
-    X(ISM_OP_COS, trig_op(ISM_OP_COS, A, trig))                                             \
+    X(ISM_OP_SIN, ism_iv_trig(ISM_OP_SIN, A, trig))                                         \
+    X(ISM_OP_COS, ism_iv_trig(ISM_OP_COS, A, trig))                                         \
     X(ISM_OP_TAN, iv_tan(A))                                                                \
     X(ISM_OP_EXP, iv_exp(A))                                                                \
     X(ISM_OP_LOG, iv_log(A))                                                                \

@@ -5,9 +5,12 @@
  * 0 × inf, counted as 0), squares as iv_square. For the batched interval gradient pass
  * (eval_interval_grad_batch.c) and the dual mesher's sub-box enclosures (octree/dual_cert.c).
  * INLINE helpers only (lanes4.h's rule). Its names are unprefixed and reserved in the files
- * that include it: the types vi, v4u; splat, pick, vabs, vdown1, vup1, vmin, vmax, vnan_to,
- * ivz and every v_* (v_splat, v_add, v_sub, v_neg, v_mul_c, v_mul, v_square); a local helper
- * there takes another name. */
+ * that include it: the types vi, v4u; splat, pick, vabs, vdown1, vup1, vdown4, vup4, vmin,
+ * vmax, vnan_to, ivz and every v_* (v_splat, v_add, v_sub, v_neg, v_mul_c, v_mul, v_square,
+ * v_trig_resolves, v_may_contain, v_trig_at, v_sin_at, v_cos_at); a local helper there takes
+ * another name. Also iv_sin_at / iv_cos_at's
+ * lane forms (down4 / up4 and may_contain's ceil test lane by lane), for eval_interval_batch.c's
+ * sines and cosines: the same IEEE operations, so the same bits, in round-to-nearest. */
 #ifndef ISM_INTERVAL_LANES_H
 #define ISM_INTERVAL_LANES_H
 
@@ -83,5 +86,46 @@ INLINE vi v_square(vi a)
     v4d lo = v4_pick(a.lo >= splat(0.0), l2, inner);
     return (vi){vmax(vdown1(lo), splat(0.0)), vup1(vmax(l2, h2))};
 }
+
+/* interval_ops.h's down4 / up4 */
+INLINE v4d vdown4(v4d x)
+{
+    return (x - splat(ISM_ROUND4_ABS)) - vabs(x) * splat(ISM_ROUND4_REL);
+}
+INLINE v4d vup4(v4d x)
+{
+    return (x + splat(ISM_ROUND4_ABS)) + vabs(x) * splat(ISM_ROUND4_REL);
+}
+
+/* iv_trig_resolves lane by lane: all ones where it holds */
+INLINE v4i v_trig_resolves(vi a)
+{
+    v4d limit = splat(ISM_TRIG_LIMIT);
+    return (a.hi - a.lo < splat(2.0 * M_PI)) & (vabs(a.lo) < limit) & (vabs(a.hi) < limit);
+}
+
+/* may_contain lane by lane (holds_integer's ceil(u) <= v; ceil is exact, so any form of it) */
+INLINE v4i v_may_contain(vi a, double phase, double period)
+{
+    v4d tol = splat(ISM_TRIG_TOL_ABS) + splat(ISM_TRIG_TOL_REL) * vmax(vabs(a.lo), vabs(a.hi));
+    v4d u = (a.lo - splat(phase)) / splat(period) - tol;
+    v4d v = (a.hi - splat(phase)) / splat(period) + tol, cu;
+    for (int j = 0; j < 4; j++)
+        cu[j] = ceil(u[j]);
+    return cu <= v;
+}
+
+/* iv_sin_at / iv_cos_at (for lanes where v_trig_resolves holds): the bounds from the sines
+ * (cosines) w1, w2 of a's bounds, then 1 where a may hold hi_phase + 2k pi and -1 where it
+ * may hold lo_phase + 2k pi (the scalar forms' phases, as written there: the same quotients) */
+INLINE vi v_trig_at(vi a, v4d w1, v4d w2, double hi_phase, double lo_phase)
+{
+    v4d lo = vmax(vdown4(vmin(w1, w2)), splat(-1.0)), hi = vmin(vup4(vmax(w1, w2)), splat(1.0));
+    hi = v4_pick(v_may_contain(a, hi_phase, 2.0 * M_PI), splat(1.0), hi);
+    lo = v4_pick(v_may_contain(a, lo_phase, 2.0 * M_PI), splat(-1.0), lo);
+    return (vi){lo, hi};
+}
+INLINE vi v_sin_at(vi a, v4d s1, v4d s2) { return v_trig_at(a, s1, s2, M_PI / 2, -M_PI / 2); }
+INLINE vi v_cos_at(vi a, v4d c1, v4d c2) { return v_trig_at(a, c1, c2, 0.0, M_PI); }
 
 #endif

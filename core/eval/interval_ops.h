@@ -35,8 +35,11 @@
 #define ISM_ROUND1_REL 0x1p-52   /* at least one ulp of x, relative to |x| */
 static inline double down1(double x) { return (x - ISM_ROUND1_ABS) - fabs(x) * ISM_ROUND1_REL; }
 static inline double up1(double x) { return (x + ISM_ROUND1_ABS) + fabs(x) * ISM_ROUND1_REL; }
-static inline double down4(double x) { return (x - 0x1p-1072) - fabs(x) * 0x1p-50; }
-static inline double up4(double x) { return (x + 0x1p-1072) + fabs(x) * 0x1p-50; }
+/* four ulps for libm's results: four times each of the steps above */
+#define ISM_ROUND4_ABS 0x1p-1072
+#define ISM_ROUND4_REL 0x1p-50
+static inline double down4(double x) { return (x - ISM_ROUND4_ABS) - fabs(x) * ISM_ROUND4_REL; }
+static inline double up4(double x) { return (x + ISM_ROUND4_ABS) + fabs(x) * ISM_ROUND4_REL; }
 
 static inline ism_interval iv(double lo, double hi)
 {
@@ -354,10 +357,14 @@ static inline int holds_integer(double u, double v)
 #define ISM_TRIG_LIMIT 1e9
 
 /* Whether [lo, hi] may contain phase + k*period for an integer k, with a margin for the
- * rounding of the division (answering yes too often only loosens, never breaks, a bound). */
+ * rounding of the division (answering yes too often only loosens, never breaks, a bound):
+ * ISM_TRIG_TOL_ABS + ISM_TRIG_TOL_REL max(|lo|, |hi|), named for interval_lanes.h's lane form,
+ * which must take the same. */
+#define ISM_TRIG_TOL_ABS 1e-12
+#define ISM_TRIG_TOL_REL 4e-16
 static inline int may_contain(double lo, double hi, double phase, double period)
 {
-    double tol = 1e-12 + 4e-16 * ism_max(fabs(lo), fabs(hi));
+    double tol = ISM_TRIG_TOL_ABS + ISM_TRIG_TOL_REL * ism_max(fabs(lo), fabs(hi));
     return holds_integer((lo - phase) / period - tol, (hi - phase) / period + tol);
 }
 
