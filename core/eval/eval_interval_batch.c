@@ -201,7 +201,8 @@ static void run_nearest(const ism_instr *in, double *ol, double *onh, const doub
  * libm pairs from the workspace's memo as the single-box pass takes them (interval_trig.h),
  * none for a lane that does not resolve (it gets [-1, 1]). The bounds stay within [-1, 1], so
  * sane() would change none. Gyroid ball at E = 1e-3 (callgrind, ism_mesh_surface, one thread):
- * box by box with iv_sin / iv_cos, 712,944 libm calls and 116.6M instructions; ~XXX now. */
+ * box by box with iv_sin / iv_cos, 712,944 libm calls and 116.6M instructions of 125.7M in
+ * ism_eval_interval_batch; with these, 2,200 sincos calls and 34.2M in all. */
 static ALWAYS_INLINE void run_trig(int op, double *restrict ol, double *restrict onh,
                                    const double *restrict al, const double *restrict anh,
                                    size_t m, rounding mode, ism_trig_cache *trig)
