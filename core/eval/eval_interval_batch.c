@@ -200,13 +200,15 @@ static void run_nearest(const ism_instr *in, double *ol, double *onh, const doub
  * bit for bit (interval_lanes.h's v_sin_at / v_cos_at, the same IEEE operations), its bounds'
  * libm pairs from the workspace's memo as the single-box pass takes them (interval_trig.h),
  * none for a lane that does not resolve (it gets [-1, 1]). The bounds stay within [-1, 1], so
- * sane() would change none. Gyroid ball at E = 1e-3 (callgrind, ism_mesh_surface, one thread):
+ * sane() would change none. Compiled twice (avx2_clone.h) and never inlined: inlined into
+ * chunks it cost tapes without sines 0.08% (Klein bottle at E = 0.0141: chunks_avx2 +0.50M,
+ * callgrind). Gyroid ball at E = 1e-3 (callgrind, ism_mesh_surface, one thread):
  * box by box with iv_sin / iv_cos, 712,944 libm calls and 116.6M instructions of 125.7M in
  * ism_eval_interval_batch; with these, 2,200 sincos calls and 34.2M in all. */
-static ALWAYS_INLINE void run_trig(int op, double *restrict ol, double *restrict onh,
-                                   const double *restrict al, const double *restrict anh,
-                                   size_t m, rounding mode, ism_trig_cache *trig)
-{
+ISM_AVX2_TWICE(__attribute__((noinline)) void, run_trig,
+               (int op, double *restrict ol, double *restrict onh, const double *restrict al,
+                const double *restrict anh, size_t m, rounding mode, ism_trig_cache *trig),
+               (op, ol, onh, al, anh, m, mode, trig),
     rounding_set(rounding_nearest(mode));
     for (size_t j = 0; j < m; j += LANES) {
         vi a = {v4_ld(al + j), -v4_ld(anh + j)};
@@ -222,8 +224,7 @@ static ALWAYS_INLINE void run_trig(int op, double *restrict ol, double *restrict
         v4_st(ol + j, v4_pick(ok, r.lo, splat(-1.0)));
         v4_st(onh + j, -v4_pick(ok, r.hi, splat(1.0)));
     }
-    rounding_set(rounding_down(mode));
-}
+    rounding_set(rounding_down(mode));)
 
 /* After an operation with an infinite constant (max(a, inf), a + inf): the invariant back. */
 static ALWAYS_INLINE void sanitize(double *restrict ol, double *restrict onh, size_t m)

@@ -13,16 +13,27 @@
 #include "core/eval/interval_ops.h"
 #include "core/eval/trig_pair.h"
 #include "core/expr/tape.h"
+#include <string.h>
 
-/* op (ISM_OP_SIN or ISM_OP_COS) over a */
+/* op (ISM_OP_SIN or ISM_OP_COS) over a: from trig's interval entries (trig_pair.h) when one
+ * holds a's bits, else both computed into the entry (a's bounds' libm pairs from the memo).
+ * An entry holds what this computes for its interval, so a hit is a miss's bits. */
 static inline ism_interval ism_iv_trig(int op, ism_interval a, ism_trig_cache *trig)
 {
     if (!iv_trig_resolves(a))
         return iv(-1.0, 1.0);
-    double s1, c1, s2, c2;
-    ism_trig_pair_libm(trig, a.lo, &s1, &c1);
-    ism_trig_pair_libm(trig, a.hi, &s2, &c2);
-    return op == ISM_OP_SIN ? iv_sin_at(a, s1, s2) : iv_cos_at(a, c1, c2);
+    uint64_t lo, hi;
+    memcpy(&lo, &a.lo, sizeof lo);
+    memcpy(&hi, &a.hi, sizeof hi);
+    uint64_t h = (lo * 0x9e3779b97f4a7c15ull) ^ (hi * 0xc2b2ae3d27d4eb4full);
+    ism_trig_iv_entry *e = &trig->iv[h >> (64 - ISM_TRIG_IV_BITS)];
+    if (e->lo != lo || e->hi != hi) {
+        double s1, c1, s2, c2;
+        ism_trig_pair_libm(trig, a.lo, &s1, &c1);
+        ism_trig_pair_libm(trig, a.hi, &s2, &c2);
+        *e = (ism_trig_iv_entry){lo, hi, iv_sin_at(a, s1, s2), iv_cos_at(a, c1, c2)};
+    }
+    return op == ISM_OP_SIN ? e->s : e->c;
 }
 
 #endif

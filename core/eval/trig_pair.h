@@ -9,6 +9,7 @@
 #ifndef ISM_TRIG_PAIR_H
 #define ISM_TRIG_PAIR_H
 
+#include "core/eval/eval.h"
 #include "core/eval/sincos.h"
 #include <stdint.h>
 #include <string.h>
@@ -61,10 +62,25 @@ typedef struct ism_trig_group_pair {
     double u[ISM_TRIG_GROUP_LANES], s[ISM_TRIG_GROUP_LANES], c[ISM_TRIG_GROUP_LANES];
 } ism_trig_group_pair;
 
+/* The single-box interval pass's sines and cosines of whole intervals (interval_trig.h's
+ * ism_iv_trig), kept by the bounds' bits, both from one miss: the gyroid takes sin u and cos u
+ * of each of three registers, and a node's neighbours share its intervals on two axes.
+ * 2^ISM_TRIG_IV_BITS direct-mapped entries (the index: a hash's top bits). A key starts as
+ * a NaN's bits, which no bound looked up has (only intervals that resolve are). */
+#define ISM_TRIG_IV_BITS 6
+#define ISM_TRIG_IV_ENTRIES (1 << ISM_TRIG_IV_BITS)
+#define ISM_TRIG_IV_EMPTY 0x7ff8dead00000000ull
+
+typedef struct ism_trig_iv_entry {
+    uint64_t lo, hi; /* the interval's bounds' bits */
+    ism_interval s, c;
+} ism_trig_iv_entry;
+
 typedef struct ism_trig_cache {
     uint64_t mask; /* entries − 1 of each table (a power of two, at most 2^ISM_TRIG_CACHE_BITS) */
     unsigned next_pair; /* the group pair a miss takes next (round robin) */
     ism_trig_group_pair pairs[ISM_TRIG_GROUP_PAIRS];
+    ism_trig_iv_entry iv[ISM_TRIG_IV_ENTRIES];
     ism_trig_entry e[]; /* ism_sincos's pairs, then (from mask + 1 on) libm's */
 } ism_trig_cache;
 
@@ -79,6 +95,8 @@ static inline void ism_trig_cache_init(ism_trig_cache *m, unsigned bits)
     m->mask = ((uint64_t)1 << bits) - 1;
     m->next_pair = 0;
     memset(m->pairs, 0, sizeof m->pairs); /* n = 0: none held (u's first lane read first) */
+    for (int i = 0; i < ISM_TRIG_IV_ENTRIES; i++)
+        m->iv[i].lo = m->iv[i].hi = ISM_TRIG_IV_EMPTY;
     for (uint64_t i = 0; i <= 2 * m->mask + 1; i++)
         m->e[i] = (ism_trig_entry){0, 0.0, 1.0}; /* ism_sincos(+0.0), and libm's */
 }

@@ -7,7 +7,9 @@
  * end or straddle a multiple of pi/2 (where a bound becomes 1 or -1, or a lane whose bound
  * were rounded the other way would differ). Also interval_lanes.h's v_sin_at / v_cos_at in
  * both compiled copies (avx2_clone.h) against iv_sin_at / iv_cos_at, so the baseline copy is
- * checked on an AVX2 machine too. */
+ * checked on an AVX2 machine too. The single-box pass keeps whole intervals' sines and cosines
+ * (trig_pair.h's interval entries): the lattice's cells repeat an axis's interval every
+ * CELLS boxes, and boxes at k pi/2 share a bound, so its hits and misses are both checked. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
