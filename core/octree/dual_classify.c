@@ -125,7 +125,8 @@ _Static_assert(ISM_PAIR_MEMO_BITS >= 6, "the pair memo: at least 64 slots (whole
  * is none. A function of the edge's two lattice points alone (f on the full tape between
  * their coordinates), and up to four nodes of a level share an edge (torus at 1e-2: 432
  * searches of 11.7K instructions each, 5.1M of 68M), so the answer is kept per thread under
- * the ends' lattice keys (cell_cache.h ism_pair_entry): a hit answers what the search would, bit for bit. */
+ * the ends' lattice keys (cell_cache.h ism_pair_entry): a hit answers what the search
+ * would, bit for bit. */
 static int edge_root_pair(dual *d, worker *w, const dnode *n, const corner_view *v, int c0,
                           int c1)
 {
@@ -233,7 +234,8 @@ static bool natural_open(const dnode *n, const corner_view *v)
 }
 
 /* natural_open on the natural enclosure in v->g, read from ism_dual_pre_models' answer when
- * it took one (pre_open_known: once, as the tail asks once before any tighten). */
+ * it took one (pre_open_known: once, as the tail asks once before any tighten; cleared
+ * too where v->g is replaced, so it never speaks of another enclosure). */
 static bool natural_open_once(const dnode *n, corner_view *v)
 {
     if (v->pre_open_known) {
@@ -299,6 +301,7 @@ static bool tighten(worker *w, corner_view *v)
     if (!take_model(w, v) || !node_over(v, NULL, &g))
         return false;
     v->g = g;
+    v->pre_open_known = false; /* that answer was about the natural enclosure */
     return true;
 }
 
@@ -341,6 +344,7 @@ static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
     if (!node_over(v, &v2, &g))
         return false;
     v->g = g;
+    v->pre_open_known = false; /* as in tighten */
     if (!natural_open(n, v))
         return true;
     /* v->g is the model's enclosure of the whole box, just seen to hold 0 */

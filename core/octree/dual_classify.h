@@ -50,10 +50,11 @@ typedef struct corner_view {
      * (ism_dual_pre_models), pre_ok its ism_dual_taylor answer, and the natural enclosure's
      * tests before it are known to fail (not taken again); classify_head clears it. */
     bool pre_model, pre_ok;
-    /* In (classify_tail, pre_g without pre_model): natural_open's answer on the natural
-     * enclosure in g, taken by ism_dual_pre_models when it chose the models (pre_open_known;
-     * the tail reads it once instead of taking it again: torus at 1e-2, ~1,000 such tests
-     * of ~300 instructions); classify_head clears it. */
+    /* In (classify_tail, pre_g; read only without pre_model): natural_open's answer on the
+     * natural enclosure in g, taken by ism_dual_pre_models when it chose the models
+     * (pre_open_known; the tail reads it once instead of taking it again: torus at 1e-2,
+     * ~1,000 such tests of ~300 instructions); classify_head clears it, and so does each
+     * place that replaces g. */
     bool pre_open_known, pre_open;
     /* With pre_model: that model's second-order form over the box (pre_v2) and enclosure
      * (pre_over, pre_over_ok: ism_dual_over's answer), taken in lanes with the other models'
