@@ -379,46 +379,102 @@ static bool empty_proven(dual *d, worker *w, const dnode *n, corner_view *v)
  * d9 cells of that tanglecube box have f(c) = 3.4e-4 and a dip of 3.3e-4 along z (min f in
  * the node 1.41e-5): a margin of half f(c) did not prove them. */
 #define CORNER_ROUNDING 1e-9
+/* touch_empty's numbers that depend on a corner only through its side along each axis,
+ * taken once for the node where they were taken for each corner (72 calls ~4.6K instructions
+ * each on the torus at 1e-2, every one failing): each the same operations on the same
+ * operands as before, so the same bits. A corner c's point is the box's (bit a of c: p[7][a],
+ * else p[0][a]), as every corner_view's builder makes it (split_task's 27 points, the root's
+ * lattice corners). */
+typedef struct touch_terms {
+    /* d[a][m]: D_a = H_aa − 2 Σ_{b≠a} t_ab, bit i of m set when the corner's side along a
+     * is its side along the i-th other axis (s_a s_b > 0: t_ab from H_ab's lower bound) */
+    double d[3][4];
+    /* lo[a][b][k], hi[a][b][k]: H_ab (x − c)_b's bounds with x_b on side k along b */
+    double lo[3][3][2], hi[3][3][2];
+    double w[3]; /* the node's sides */
+} touch_terms;
+
+/* The other two axes than a, in ascending order. */
+static void other_axes(int a, int *b1, int *b2)
+{
+    *b1 = a == 0 ? 1 : 0;
+    *b2 = a == 2 ? 1 : 2;
+}
+
+static void touch_terms_of(const corner_view *v, touch_terms *tt)
+{
+    const ism_interval *h = v->model.box.h;
+    for (int a = 0; a < 3; a++) {
+        int b1, b2;
+        other_axes(a, &b1, &b2);
+        ism_interval h1 = h[ism_dual_hess_at(a, b1)], h2 = h[ism_dual_hess_at(a, b2)];
+        for (int m = 0; m < 4; m++) {
+            double t = 0;
+            t += m & 1 ? max_of(0, -h1.lo) : max_of(0, h1.hi);
+            t += m & 2 ? max_of(0, -h2.lo) : max_of(0, h2.hi);
+            tt->d[a][m] = h[ism_dual_hess_at(a, a)].lo - 2 * t;
+        }
+        for (int b = 0; b < 3; b++) {
+            ism_interval hab = h[ism_dual_hess_at(a, b)];
+            for (int k = 0; k < 2; k++) {
+                double off = v->p[k ? 7 : 0][b] - v->model.c[b];
+                tt->lo[a][b][k] = off >= 0 ? hab.lo * off : hab.hi * off;
+                tt->hi[a][b][k] = off >= 0 ? hab.hi * off : hab.lo * off;
+            }
+        }
+        tt->w[a] = fabs(v->p[7][a] - v->p[0][a]);
+    }
+}
+
+/* The least f may gain along axis a from corner c, whose f is f > 0 (G_a w + ½ D_a w² over
+ * w in [0, h_a]; D_a = d); NaN or infinite when that is not known. */
+static double touch_least(const corner_view *v, const touch_terms *tt, int c, int a, double d)
+{
+    /* G_a: s_a ∇f(c)_a's lower bound, ∇f(c) in ∇f(centre) + H (c − centre) */
+    ism_interval g = v->model.at.d[a];
+    for (int b = 0; b < 3; b++) {
+        g.lo += tt->lo[a][b][c >> b & 1];
+        g.hi += tt->hi[a][b][c >> b & 1];
+    }
+    double g_a = !(c >> a & 1) ? g.lo : -g.hi, w = tt->w[a];
+    double at_w = g_a * w + 0.5 * d * w * w, least = fmin(0, at_w);
+    if (g_a < 0 && d > 0 && -g_a / d < w)
+        least = -g_a * g_a / (2 * d); /* the parabola's vertex inside [0, w] */
+    return least;
+}
+
 static bool touch_empty(const dnode *n, const corner_view *v)
 {
     if (!v->have_model)
         return false;
     const ism_interval *h = v->model.box.h;
+    for (int e = 0; e < 6; e++)
+        if (!(h[e].lo <= h[e].hi))
+            return false; /* a NaN bound: no corner's expansion holds */
+    touch_terms tt;
+    bool made = false;
     for (int c = 0; c < 8; c++) {
         if (!(n->f[c] >= 0))
             continue;
-        double s[3], low = 0; /* low: the sum of the axes' minima (f(c) > 0) */
-        bool ok = true;
-        for (int a = 0; a < 3; a++) {
-            s[a] = (c >> a & 1) ? -1.0 : 1.0;
-            ok = ok && (n->f[c] != 0 || v->n[c][a] * s[a] >= 0);
+        if (!made) {
+            touch_terms_of(v, &tt);
+            made = true;
         }
+        bool ok = true;
+        for (int a = 0; a < 3; a++) /* s_a = −1 on the corner's upper side along a */
+            ok = ok && (n->f[c] != 0 || v->n[c][a] * ((c >> a & 1) ? -1.0 : 1.0) >= 0);
+        double low = 0; /* the sum of the axes' minima (f(c) > 0) */
         for (int a = 0; a < 3 && ok; a++) {
-            double t = 0;
-            for (int b = 0; b < 3; b++) {
-                ism_interval hab = h[ism_dual_hess_at(a, b)];
-                ok = ok && hab.lo <= hab.hi; /* not NaN */
-                if (b != a)
-                    t += s[a] * s[b] > 0 ? max_of(0, -hab.lo) : max_of(0, hab.hi);
-            }
-            double d_a = h[ism_dual_hess_at(a, a)].lo - 2 * t;
+            int b1, b2;
+            other_axes(a, &b1, &b2);
+            int side = c >> a & 1;
+            double d_a = tt.d[a][((c >> b1 & 1) == side) | ((c >> b2 & 1) == side) << 1];
             if (n->f[c] == 0) {
-                ok = ok && d_a >= 0;
+                ok = d_a >= 0;
                 continue;
             }
-            /* G_a: s_a ∇f(c)_a's lower bound, ∇f(c) in ∇f(centre) + H (c − centre) */
-            ism_interval g = v->model.at.d[a];
-            for (int b = 0; b < 3; b++) {
-                ism_interval hab = h[ism_dual_hess_at(a, b)];
-                double off = v->p[c][b] - v->model.c[b];
-                g.lo += off >= 0 ? hab.lo * off : hab.hi * off;
-                g.hi += off >= 0 ? hab.hi * off : hab.lo * off;
-            }
-            double g_a = s[a] > 0 ? g.lo : -g.hi, w = fabs(v->p[7][a] - v->p[0][a]);
-            double at_w = g_a * w + 0.5 * d_a * w * w, least = fmin(0, at_w);
-            if (g_a < 0 && d_a > 0 && -g_a / d_a < w)
-                least = -g_a * g_a / (2 * d_a); /* the parabola's vertex inside [0, w] */
-            ok = ok && isfinite(least);
+            double least = touch_least(v, &tt, c, a, d_a);
+            ok = isfinite(least);
             low += least;
         }
         if (ok && (n->f[c] == 0 || n->f[c] + low > CORNER_ROUNDING * (n->f[c] - low)))
