@@ -502,24 +502,56 @@ static bool fan_from_best_corner(ism_cell_out *out, size_t base, polygon *pg)
     return fan_from_corner(out, base, pg->n, c);
 }
 
+/* The points corner_fan_error measures at once: a fan's centroids and diagonals' middles
+ * are 2n − 5 for n corners, so a polygon of up to 10 corners in one batch of
+ * ISM_GRAD_UNROLLED lanes (eval.h: one pass of the tape). */
+#define FAN_POINTS ISM_GRAD_UNROLLED
+
+/* ism_sample_dist_between at p between the corners v[0..n), f and g = ∇f at p given. */
+static double fan_point_dist(ism_sampler *s, const double p[3], double f, const double g[3],
+                             const double *const *v, int n)
+{
+    return ism_dist_beyond(s, p, ism_plain_dist(s, p, f, g, s->dist_above), v, n);
+}
+
 /* The largest distance to f = 0 at the centroids of the fan of q[0..n) from corner c and at
  * the middles of its diagonals (its sides are the polygon's, whatever the triangulation),
- * stopping once it passes bound. */
-static double corner_fan_error(ism_sampler *s, const ism_fpoint *q, size_t n, size_t c,
-                               double bound)
+ * stopping once it passes bound. f and ∇f at the points are evaluated FAN_POINTS at a time
+ * (ism_sample_grad_batch: bit for bit ism_sample_grad's values one at a time), the rest of
+ * ism_sample_dist_between point by point in the fan's order; a fan that passes the bound
+ * early leaves the rest of its batch unread. Not inlined: its batch's room on the stack of
+ * every polygon's call cost Barth 0.0259, which seldom fans from a corner, 16 instructions a
+ * polygon. */
+static __attribute__((noinline)) double corner_fan_error(ism_sampler *s, const ism_fpoint *q,
+                                                         size_t n, size_t c, double bound)
 {
     double worst = 0;
     const double *a = q[c].p;
-    for (size_t i = 1; i + 1 < n && worst <= bound; i++) {
-        const double *b = q[(c + i) % n].p, *d = q[(c + i + 1) % n].p;
-        double m[3];
-        for (int k = 0; k < 3; k++)
-            m[k] = (a[k] + b[k] + d[k]) / 3;
-        worst = fmax(worst, ism_sample_dist_between(s, m, (const double *[3]){a, b, d}, 3));
-        if (i + 2 < n) { /* a-d is a diagonal */
-            for (int k = 0; k < 3; k++)
-                m[k] = 0.5 * (a[k] + d[k]);
-            worst = fmax(worst, ism_sample_dist_between(s, m, (const double *[2]){a, d}, 2));
+    for (size_t i = 1; i + 1 < n && worst <= bound;) {
+        double m[FAN_POINTS][3], f[FAN_POINTS], g[FAN_POINTS][3];
+        size_t k = 0, last = i; /* triangles i .. last − 1 measured in this batch */
+        for (; last + 1 < n && k + 2 <= FAN_POINTS; last++) {
+            const double *b = q[(c + last) % n].p, *e = q[(c + last + 1) % n].p;
+            for (int j = 0; j < 3; j++)
+                m[k][j] = (a[j] + b[j] + e[j]) / 3;
+            k++;
+            if (last + 2 < n) { /* a-e is a diagonal */
+                for (int j = 0; j < 3; j++)
+                    m[k][j] = 0.5 * (a[j] + e[j]);
+                k++;
+            }
+        }
+        ism_sample_grad_batch(s, (const double (*)[3])m, f, g, k);
+        for (k = 0; i < last && worst <= bound; i++) {
+            const double *b = q[(c + i) % n].p, *e = q[(c + i + 1) % n].p;
+            worst = fmax(worst, fan_point_dist(s, m[k], f[k], g[k], (const double *[3]){a, b, e},
+                                               3));
+            k++;
+            if (i + 2 < n) {
+                worst = fmax(worst, fan_point_dist(s, m[k], f[k], g[k], (const double *[2]){a, e},
+                                                   2));
+                k++;
+            }
         }
     }
     return worst;
