@@ -101,13 +101,17 @@ static bool run_curves(cf_run *r)
 }
 
 /* The points left to conform (sheet-carrying, no curve's end vertex, in the box) when they
- * are CF_COVER_PLAIN_PASSES or more: their box, grown as each one's first query
- * (cf_longest_edge_near: CF_RHO_CELLS cells, and as far again ahead), is covered in one pass
- * over the mesh, where one pass a point would come first and then the growth's, which covers
- * the box holding every query (conform_grid.c): Barth's sextic, 30 nodes, took 11 passes
- * (ism_conform_mesh, callgrind: 79.0M -> 61.9M at E 0.0259, 126.9M -> 88.1M at E 0.00389).
- * The triangles are filed in another order in their cells then, which only the pinch
- * untangling's list keeps (conform_refine.c): not done where the locus has a pinch point.
+ * are CF_COVER_PLAIN_PASSES or more: the box holding each one's first query
+ * (cf_longest_edge_near's, CF_RHO_CELLS cells around it) is covered in one pass over the mesh,
+ * where one pass a point would come first and then the growth's, which covers the box holding
+ * every query (conform_grid.c): Barth's sextic, 30 nodes, took 11 passes (ism_conform_mesh,
+ * callgrind: 79.0M -> 61.9M at E 0.0259, 126.9M -> 88.1M at E 0.00389). Not grown ahead for
+ * the widenings as cf_longest_edge_near's own cover is: that filed triangles no query came to
+ * (the same passes; 0.95M, 0.77M, 0.56M more at E 0.0259, 0.00389, 0.00109).
+ * The triangles are filed in another order in their cells then, which two readers see: the
+ * pinch untangling's list (conform_refine.c), so not done where the locus has a pinch point;
+ * and folded_near's work count (conform_point.c: it stops at the first fold), which runs only
+ * for a lone point (no finite clearance), and with 8 points here none is lone.
  * False when out of memory. */
 static bool cover_points(cf_run *r)
 {
@@ -129,11 +133,11 @@ static bool cover_points(cf_run *r)
             hi[k] = fmax(hi[k], p[k]);
         }
     }
-    if (n < CF_COVER_PLAIN_PASSES || r->c.stopped)
+    if (n < CF_COVER_PLAIN_PASSES || stop_now(r))
         return true;
-    double r0 = CF_RHO_CELLS * r->c.cell, qlo[3], qhi[3];
-    cf_query_box(lo, hi, r0, qlo, qhi);
-    return cf_ctx_prepare(&r->c) && cf_tgrid_cover(&r->c.grid, r->c.m, qlo, qhi, r0);
+    double qlo[3], qhi[3];
+    cf_query_box(lo, hi, CF_RHO_CELLS * r->c.cell, qlo, qhi);
+    return cf_ctx_prepare(&r->c) && cf_tgrid_cover(&r->c.grid, r->c.m, qlo, qhi, 0);
 }
 
 static bool run_items(cf_run *r)
