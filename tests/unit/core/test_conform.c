@@ -16,6 +16,7 @@
 #include "core/singular/check.h"
 #include "core/singular/conform.h"
 #include "core/singular/conform_internal.h"
+#include "core/util/clock.h"
 
 /* The refilled strip is at most this many finest cells from the locus (the cut's radius is
  * 2.5 cells, or 1.25 × the longest edge there): centroids this close are "near". */
@@ -336,63 +337,161 @@ Test(conform, kummer_sixteen_nodes)
     kummer_nodes(kummer16, 16, 2.5, 6, 6, pf_quick() ? 2 : 1);
 }
 
-/* Kummer's 16 nodes, spread over the surface, are CF_COVER_PLAIN_PASSES or more: the pass
- * covers their box in one pass over the mesh before the first (conform.c's cover_points),
- * where a pass a node and the growth's would come. The triangles are filed in another order
- * then, which no answer but the pinch untangling's list depends on: the same locus with a
- * pinch point added far outside the box (no sheet there, nothing near it to untangle) is
- * conformed without the early pass, and the meshes must be the same bit for bit, every node
- * with the same cones, in the three placements (depth 5: polygonised twice each). */
-Test(conform, kummer_sixteen_nodes_one_cover_pass)
+/* One conformance of the cover tests: n of Kummer's nodes, every step-th (and, with pinch, a pinch
+ * point far outside the box) in box at depth d, polygonised first; with passed, under a
+ * deadline already passed when the pass starts. */
+typedef struct cover_run {
+    ism_mesh m;
+    ism_locus l;
+    ism_conform_stats st;
+} cover_run;
+
+static void cover_conform(const ism_tape *t, const ism_locus *nodes, size_t n, size_t step,
+                          const double box[6], int d, bool pinch, bool passed, cover_run *out)
+{
+    ism_poly_stats ps;
+    pf_run(t, box, 3, d, 1, &out->m, &ps);
+    ism_locus_init(&out->l);
+    for (size_t j = 0; j < n; j++)
+        cr_assert(ism_locus_add_point(&out->l, &nodes->points[j * step]));
+    if (pinch)
+        add_point(&out->l, 100, 100, 100, ISM_SING_PINCH);
+    ism_locus_options o;
+    ism_locus_options_default(&o);
+    memcpy(o.box, box, sizeof o.box);
+    o.max_depth = d;
+    o.deadline_ms = passed ? ism_now_ms() - 1.0 : 0;
+    ism_error err;
+    cr_assert(ism_conform_mesh(t, &o, &out->l, &out->m, &out->st, &err), "%s", err.message);
+}
+
+static void cover_run_free(cover_run *r)
+{
+    ism_mesh_free(&r->m);
+    ism_locus_free(&r->l);
+}
+
+/* n nodes (every step-th) conformed twice, without and with the pinch point far outside the box
+ * (no sheet there, nothing near it to untangle), which switches conform.c's early cover pass
+ * off and changes nothing conformed: the meshes must be the same bit for bit, every node with
+ * the same cones, and the work and polls the same (the gathers' order changes, what they count
+ * must not: conform_point.c's folded_near stops at its first fold, and only runs for a lone
+ * point, which cover_points never has). passes: each run's grid_passes. */
+static void cover_pair(const ism_tape *t, const ism_locus *nodes, size_t n, size_t step,
+                       const double box[6], int d, int w, size_t passes[2])
+{
+    cover_run r[2];
+    for (int i = 0; i < 2; i++)
+        cover_conform(t, nodes, n, step, box, d, i == 1, false, &r[i]);
+    cr_log_info("%zu nodes, shift %d: %zu cover passes, %zu without the early one", n, w,
+                r[0].st.grid_passes, r[1].st.grid_passes);
+    cr_assert_eq(r[0].st.points_conformed, n, "shift %d", w);
+    pf_same_mesh(&r[0].m, &r[1].m, "kummer nodes, early cover pass or not");
+    for (size_t j = 0; j < n; j++)
+        cr_assert_eq(r[0].l.points[j].cones, r[1].l.points[j].cones, "shift %d node %zu", w, j);
+    cr_assert_eq(r[0].st.work, r[1].st.work, "shift %d", w);
+    cr_assert_eq(r[0].st.polls, r[1].st.polls, "shift %d", w);
+    for (int i = 0; i < 2; i++) {
+        passes[i] = r[i].st.grid_passes;
+        cover_run_free(&r[i]);
+    }
+}
+
+static ism_tape *kummer16_nodes(ism_locus *nodes)
 {
     const pf_surface s = {"(x^2 + y^2 + z^2 - mu2)^2 - lambda*p*q*r*s", kummer16, 2, kummer_lets,
                           5};
     ism_tape *t = pf_compile(&s);
+    ism_locus_init(nodes);
+    find_nodes(t, 2.5, nodes);
+    cr_assert_eq(nodes->npoints, 16);
+    return t;
+}
+
+static const double kummer16_box[6] = {-3, -3, -3, 3, 3, 3};
+
+/* Calls body(t, nodes, box, d, w, arg) for Kummer's 16 nodes in the three placements w of
+ * kummer16_box at depth 5 (the cover tests polygonise there once or twice each). */
+typedef void kummer16_body(const ism_tape *t, const ism_locus *nodes, const double box[6], int d,
+                           int w, void *arg);
+
+static void kummer16_placed(kummer16_body *body, void *arg)
+{
     ism_locus nodes;
-    ism_locus_init(&nodes);
-    find_nodes(t, 2.5, &nodes);
-    cr_assert_eq(nodes.npoints, 16);
-    cr_assert_geq(nodes.npoints, CF_COVER_PLAIN_PASSES);
-    const double base[6] = {-3, -3, -3, 3, 3, 3};
+    ism_tape *t = kummer16_nodes(&nodes);
     const int d = 5;
     for (int w = 0; w < 3; w++) {
         double box[6];
-        shifted_box(base, shift_amount(w, base, d), box);
-        ism_mesh m[2];
-        ism_locus l[2];
-        ism_conform_stats st[2];
-        for (int i = 0; i < 2; i++) {
-            ism_poly_stats ps;
-            pf_run(t, box, 3, d, 1, &m[i], &ps);
-            ism_locus_init(&l[i]);
-            for (size_t j = 0; j < nodes.npoints; j++)
-                cr_assert(ism_locus_add_point(&l[i], &nodes.points[j]));
-            if (i == 1)
-                add_point(&l[i], 100, 100, 100, ISM_SING_PINCH);
-            ism_locus_options o;
-            ism_locus_options_default(&o);
-            memcpy(o.box, box, sizeof o.box);
-            o.max_depth = d;
-            ism_error err;
-            cr_assert(ism_conform_mesh(t, &o, &l[i], &m[i], &st[i], &err), "%s", err.message);
-        }
-        cr_log_info("shift %d: %zu cover passes, %zu without the early one", w,
-                    st[0].grid_passes, st[1].grid_passes);
-        cr_assert_eq(st[0].points_conformed, 16, "shift %d", w);
-        cr_assert_lt(st[0].grid_passes, 3, "shift %d: %zu passes", w, st[0].grid_passes);
-        /* a pass a node, but where one covered its neighbours ahead */
-        cr_assert_gt(st[1].grid_passes, st[0].grid_passes + 3, "shift %d: %zu passes", w,
-                     st[1].grid_passes);
-        pf_same_mesh(&m[0], &m[1], "kummer-16 nodes, early cover pass or not");
-        for (size_t j = 0; j < nodes.npoints; j++)
-            cr_assert_eq(l[0].points[j].cones, l[1].points[j].cones, "shift %d node %zu", w, j);
-        for (int i = 0; i < 2; i++) {
-            ism_mesh_free(&m[i]);
-            ism_locus_free(&l[i]);
-        }
+        shifted_box(kummer16_box, shift_amount(w, kummer16_box, d), box);
+        body(t, &nodes, box, d, w, arg);
     }
     ism_locus_free(&nodes);
     ism_tape_free(t);
+}
+
+typedef struct pairs_arg {
+    size_t n, step;
+    size_t passes[3][2]; /* by placement: cover_pair's */
+} pairs_arg;
+
+static void pairs_body(const ism_tape *t, const ism_locus *nodes, const double box[6], int d,
+                       int w, void *arg)
+{
+    pairs_arg *a = arg;
+    cover_pair(t, nodes, a->n, a->step, box, d, w, a->passes[w]);
+}
+
+/* Kummer's 16 nodes, spread over the surface, are CF_COVER_PLAIN_PASSES or more: the pass
+ * covers their box in one pass over the mesh before the first (conform.c's cover_points),
+ * where a pass a node and the growth's would come. The triangles are filed in another order
+ * then, which no answer but the pinch untangling's list depends on (cover_pair). */
+Test(conform, kummer_sixteen_nodes_one_cover_pass)
+{
+    cr_assert_geq(16, CF_COVER_PLAIN_PASSES);
+    pairs_arg a = {.n = 16, .step = 1};
+    kummer16_placed(pairs_body, &a);
+    for (int w = 0; w < 3; w++) {
+        cr_assert_lt(a.passes[w][0], 3, "shift %d: %zu passes", w, a.passes[w][0]);
+        /* a pass a node, but where one covered its neighbours ahead */
+        cr_assert_gt(a.passes[w][1], a.passes[w][0] + 3, "shift %d: %zu passes", w,
+                     a.passes[w][1]);
+    }
+}
+
+/* One node fewer than CF_COVER_PLAIN_PASSES, every other one (apart: a pass each at first):
+ * no early pass, so the runs with and without the pinch point take the nodes' passes alike,
+ * and the one with it one pass more: the pinch untangling's gather around the point far
+ * outside the box (conform_refine.c). */
+Test(conform, kummer_seven_nodes_no_early_cover_pass)
+{
+    pairs_arg a = {.n = CF_COVER_PLAIN_PASSES - 1, .step = 2};
+    kummer16_placed(pairs_body, &a);
+    for (int w = 0; w < 3; w++)
+        cr_assert_eq(a.passes[w][1], a.passes[w][0] + 1, "shift %d", w);
+}
+
+/* A deadline passed before the pass starts: nothing is conformed, the mesh is the
+ * polygoniser's bit for bit, and no cover pass is made for the nodes (the early pass, an
+ * O(V + T) walk, waits for the deadline check as the nodes do). */
+static void deadline_body(const ism_tape *t, const ism_locus *nodes, const double box[6],
+                          int d, int w, void *arg)
+{
+    (void)arg;
+    cover_run r;
+    cover_conform(t, nodes, nodes->npoints, 1, box, d, false, true, &r);
+    ism_mesh m;
+    ism_poly_stats ps;
+    pf_run(t, box, 3, d, 1, &m, &ps);
+    pf_same_mesh(&r.m, &m, "kummer-16 nodes, deadline passed");
+    cr_assert_eq(r.st.points_conformed, 0, "shift %d", w);
+    cr_assert_eq(r.st.grid_passes, 0, "shift %d", w);
+    ism_mesh_free(&m);
+    cover_run_free(&r);
+}
+
+Test(conform, kummer_sixteen_nodes_deadline_passed_no_cover_pass)
+{
+    kummer16_placed(deadline_body, NULL);
 }
 
 /* ---- two unit spheres touching at the origin ---- */
