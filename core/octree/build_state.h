@@ -59,6 +59,8 @@ typedef struct thread_state {
     ism_thin_ws thin;         /* the hidden-piece search's scratch */
     ism_face_memo faces;      /* its verdicts on faces, for the node across (face_memo.h) */
     ism_root_log roots;       /* the roots memo.roots was filled with (root_table.h) */
+    /* the counters, visited to new_nodes, together (level_build.c saves and restores them
+     * whole when it gives a task up) */
     uint64_t visited, excluded, unresolved;
     uint64_t thin_searched, thin_found, thin_undecided, deep_leaves;
     uint64_t tape_misses;     /* leaves whose shortened tape found no room in leaf_tapes */
@@ -131,8 +133,10 @@ bool ism_build_test_node(build *b, thread_state *th, const ism_node *nd, const i
                          const ism_corners *known, ism_node *out, int *limit_io);
 
 /* level_build.c: does the level-by-level build decide as grow would, and the task's node
- * v->v[0] and its subtree grown so. */
+ * v->v[0] and its subtree grown so: grown, failed (the build's status says why), or declined
+ * (v untouched: the task is to be grown by grow). */
+enum ism_levels_result { ISM_LEVELS_GROWN, ISM_LEVELS_FAILED, ISM_LEVELS_DECLINED };
 bool ism_levels_apply(const build *b, const thread_state *th);
-bool ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit);
+enum ism_levels_result ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit);
 
 #endif

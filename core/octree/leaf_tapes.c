@@ -99,7 +99,7 @@ static bool index_room(ism_leaf_tapes *lt)
 /* Adds a copy of t (hash h) as the next number; 0 at a limit or out of memory (lock held). */
 static unsigned add(ism_leaf_tapes *lt, uint64_t h, const ism_tape *t)
 {
-    if (lt->n >= ISM_OCTREE_TAPES || lt->bytes + tape_bytes(t) > ISM_OCTREE_TAPE_BYTES ||
+    if (lt->n >= lt->max_n || lt->bytes + tape_bytes(t) > ISM_OCTREE_TAPE_BYTES ||
         !index_room(lt) || !ism_grow((void **)&lt->v, &lt->cap, lt->n + 1, sizeof *lt->v, 16))
         return 0;
     ism_tape *c = copy_of(t);
@@ -114,6 +114,7 @@ static unsigned add(ism_leaf_tapes *lt, uint64_t h, const ism_tape *t)
 bool ism_leaf_tapes_init(ism_leaf_tapes *lt, const ism_octree *previous)
 {
     memset(lt, 0, sizeof *lt);
+    lt->max_n = ISM_OCTREE_TAPES;
     pthread_mutex_init(&lt->lock, NULL);
     size_t n = previous ? previous->ntapes : 0;
     for (size_t k = 0; k < n; k++) {

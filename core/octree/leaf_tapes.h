@@ -38,6 +38,8 @@ typedef struct ism_leaf_tapes {
     ism_leaf_tape_slot *index; /* open addressing by hash */
     size_t index_cap;     /* a power of two, at least twice n */
     size_t bytes;         /* the code the tapes hold (ISM_OCTREE_TAPE_BYTES at most) */
+    size_t max_n;         /* tapes it holds at most: ISM_OCTREE_TAPES (set by init; a table
+                             of a task's own may lower it, octree_build.h level_tapes_max) */
 } ism_leaf_tapes;
 
 /* An empty table, or, with previous, a copy of previous's tapes under the same numbers (so

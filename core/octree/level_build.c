@@ -6,6 +6,7 @@
 #include "core/util/grow.h"
 
 #include <assert.h>
+#include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -53,7 +54,8 @@ typedef struct level_vec {
 /* The shortened tapes a task's nodes are tested on, each distinct tape once: a level's nodes
  * are decided together, so each needs its own (grow keeps one a level, th->tapes, as it
  * decides one node at a time). Numbered from 1 in an ism_leaf_tapes table of the task's own
- * (0: f's own tape, b->p->tape); what a number asks of its tape is kept beside it. */
+ * (0: f's own tape, b->p->tape), under the tree's limits (past them the task is given up to
+ * grow, ism_grow_levels); what a number asks of its tape is kept beside it. */
 typedef struct level_tapes {
     ism_leaf_tapes table;
     ism_leaf_tapes_cache cache;
@@ -63,6 +65,7 @@ typedef struct level_tapes {
     uint32_t last;     /* the number a shortening got last (0: none yet), compared first:
                           siblings mostly shorten alike, and a compare costs less than the
                           table's hash */
+    bool full;         /* a tape found no room in table: the task is grown node by node */
 } level_tapes;
 
 /* Nodes of a level decided together: their corners and roots fit the memos (2^16 corner
@@ -94,8 +97,9 @@ static const ism_tape *tape_at(const build *b, const level_tapes *lt, uint32_t i
 }
 
 /* The number of tape t, as ism_build_node_range returned it below a node tested on tape
- * `from` (number id): id when it did not shorten, else its copy's. False when out of memory
- * (or past the table's limits: octree.h's ISM_OCTREE_TAPES distinct tapes in one task). */
+ * `from` (number id): id when it did not shorten, else its copy's. False when out of memory,
+ * or with lt->full when the table has no room for t (its limits, octree.h's, bound a task's
+ * scratch: the task is then grown as grow grows it, ism_grow_levels). */
 static bool tape_id(build *b, level_tapes *lt, const ism_tape *t, const ism_tape *from,
                     uint32_t id, uint32_t *out)
 {
@@ -118,7 +122,8 @@ static bool tape_id(build *b, level_tapes *lt, const ism_tape *t, const ism_tape
         lt->cap = cap < c2 ? cap : c2;
     }
     *out = lt->last = k;
-    return k ? true : ism_build_fail(b, ISM_BUILD_NO_MEMORY);
+    lt->full = k == 0;
+    return k != 0;
 }
 
 /* What level_tapes.facts keeps of a tape number: asked; the tape keeps a min/max (then each
@@ -257,11 +262,12 @@ static bool decide_chunk(build *b, thread_state *th, level_tapes *lt, level_vec 
                 lv->number[j] = leaf_number(b, th, lt, id);
             continue;
         }
-        if ((th->new_nodes += 8) >= NODE_BATCH && !ism_build_count_nodes(b, th))
-            return false;
         lv->v[j].state = ISM_NODE_SPLIT;
         lv->v[j].child = (int32_t)next->n;
         if (!split_node(b, th, lt, &nd, id, limit, next))
+            return false;
+        /* counted once appended, so that the task's levels hold the nodes it counted */
+        if ((th->new_nodes += 8) >= NODE_BATCH && !ism_build_count_nodes(b, th))
             return false;
     }
     return true;
@@ -297,7 +303,9 @@ static bool first_level(build *b, thread_state *th, level_tapes *lt, const ism_n
     ism_interval range;
     uint32_t id;
     const ism_tape *t = ism_build_node_range(b, th, nd, b->p->tape, &range);
-    if (!tape_id(b, lt, t, b->p->tape, 0, &id) || !level_room(b, lv))
+    if (!tape_id(b, lt, t, b->p->tape, 0, &id))
+        return false;
+    if (!level_room(b, lv))
         return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
     lv->v[0] = *nd;
     lv->side[0] = (level_side){range, limit, id};
@@ -307,20 +315,57 @@ static bool first_level(build *b, thread_state *th, level_tapes *lt, const ism_n
     return true;
 }
 
-/* The task's node v->v[0] and its subtree, decided level by level (ism_levels_apply). */
-bool ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit)
+/* The thread's counters, from visited to new_nodes (build_state.h keeps them together). */
+#define COUNTS_AT offsetof(thread_state, visited)
+#define COUNTS_SIZE (offsetof(thread_state, new_nodes) + sizeof(size_t) - COUNTS_AT)
+
+/* A task given up (lt->full): its counters as they were (saved), and the nodes of its levels
+ * that went to the shared count taken back, so that grow counts the task as if alone (they
+ * are nodes grow makes too: the count never held more than the build's end holds). */
+static void give_up(build *b, thread_state *th, const level_vec *lv, int top,
+                    const unsigned char *saved)
+{
+    size_t made = 0, before;
+    for (int j = top + 1; j <= ISM_GRID_MAX_DEPTH + 1; j++)
+        made += lv[j].n;
+    memcpy(&before, saved + offsetof(thread_state, new_nodes) - COUNTS_AT, sizeof before);
+    atomic_fetch_sub(&b->nodes_total, before + made - th->new_nodes);
+    memcpy((unsigned char *)th + COUNTS_AT, saved, COUNTS_SIZE);
+}
+
+static void free_tapes(level_tapes *lt)
+{
+    ism_leaf_tapes_free(&lt->table);
+    free(lt->facts);
+    free(lt->leaf);
+}
+
+/* The task's node v->v[0] and its subtree, decided level by level (ism_levels_apply); or
+ * ISM_LEVELS_DECLINED, v untouched and the thread's counters as they were, when a tape found
+ * no room in the task's table (level_tapes): grow's one tape a level never runs out. The
+ * shared leaf_tapes may keep tapes the given-up leaves numbered (numbers follow the order
+ * tapes are met anyway). */
+enum ism_levels_result ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit)
 {
     level_vec lv[ISM_GRID_MAX_DEPTH + 2];
     memset(lv, 0, sizeof lv);
     int top = v->v[0].level, l = top;
+    unsigned char saved[COUNTS_SIZE];
+    memcpy(saved, (const unsigned char *)th + COUNTS_AT, COUNTS_SIZE);
     /* none when no tape shortens (every node on f's own: number 0) */
     level_tapes *lt = b->shortening ? calloc(1, sizeof *lt) : NULL;
+    bool table = lt && ism_leaf_tapes_init(&lt->table, NULL);
     ism_corners *k = malloc(LEVEL_CHUNK * sizeof *k); /* the chunk's tested nodes' */
-    if ((b->shortening && (!lt || !ism_leaf_tapes_init(&lt->table, NULL))) || !k) {
+    if ((b->shortening && !table) || !k) {
+        if (table)
+            free_tapes(lt);
         free(lt);
         free(k);
-        return ism_build_fail(b, ISM_BUILD_NO_MEMORY);
+        ism_build_fail(b, ISM_BUILD_NO_MEMORY);
+        return ISM_LEVELS_FAILED;
     }
+    if (lt && b->p->level_tapes_max)
+        lt->table.max_n = b->p->level_tapes_max;
     bool ok = first_level(b, th, lt, &v->v[0], limit, &lv[top]);
     for (; ok && l <= ISM_GRID_MAX_DEPTH && lv[l].n; l++) {
         for (size_t from = 0; ok && from < lv[l].n; from += LEVEL_CHUNK) {
@@ -335,17 +380,17 @@ bool ism_grow_levels(build *b, thread_state *th, node_vec *v, int limit)
      * as an untested leaf, so say so loudly rather than mesh it. */
     assert(!ok || lv[ISM_GRID_MAX_DEPTH + 1].n == 0);
     ok = ok && lay_out(b, v, 0, lv, top, 0);
+    bool declined = !ok && lt && lt->full && atomic_load(&b->failed) == ISM_BUILD_OK;
+    if (declined)
+        give_up(b, th, lv, top, saved);
     for (int j = top; j <= ISM_GRID_MAX_DEPTH + 1; j++) {
         free(lv[j].v);
         free(lv[j].side);
         free(lv[j].number);
     }
-    if (lt) {
-        ism_leaf_tapes_free(&lt->table);
-        free(lt->facts);
-        free(lt->leaf);
-        free(lt);
-    }
+    if (lt)
+        free_tapes(lt);
+    free(lt);
     free(k);
-    return ok;
+    return declined ? ISM_LEVELS_DECLINED : ok ? ISM_LEVELS_GROWN : ISM_LEVELS_FAILED;
 }

@@ -867,10 +867,13 @@ static void run_task(void *ctx, size_t task, int thread)
     thread_state *th = &b->threads[thread];
     node_vec *out = &b->task_out[task];
     /* The task's tape: shorten from the full tape over the task's own box on the way. */
-    bool ok = ism_levels_apply(b, th)
-                  ? ism_grow_levels(b, th, out, b->tasks[task].limit)
-                  : grow(b, th, out, 0, b->p->tape, NULL, b->tasks[task].limit, NULL,
-                         b->tasks[task].previous, NULL);
+    enum ism_levels_result r = ism_levels_apply(b, th)
+                                   ? ism_grow_levels(b, th, out, b->tasks[task].limit)
+                                   : ISM_LEVELS_DECLINED;
+    bool ok = r == ISM_LEVELS_DECLINED
+                  ? grow(b, th, out, 0, b->p->tape, NULL, b->tasks[task].limit, NULL,
+                         b->tasks[task].previous, NULL)
+                  : r == ISM_LEVELS_GROWN;
     if (ok)
         ism_build_count_nodes(b, th);
     report_progress(b);

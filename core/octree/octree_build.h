@@ -99,6 +99,10 @@ typedef struct ism_octree_build_params {
     bool depth_first;                 /* every task grown node by node, never a level at a
                                          time (level_build.c): tests hold the two builds
                                          equal, bit for bit */
+    unsigned level_tapes_max;         /* tests: a level-built task's own table of shortened
+                                         tapes holds at most this many (0: octree.h's
+                                         ISM_OCTREE_TAPES); past it the task is grown node
+                                         by node (level_build.c) */
     const volatile int *cancel;
     void (*progress)(void *ctx, double fraction); /* fraction of subtrees done */
     void *progress_ctx;
