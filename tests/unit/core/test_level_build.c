@@ -65,11 +65,12 @@ static void unbuild(built *b)
     ism_root_table_free(&b->roots);
 }
 
+/* Instruction by instruction, registers too (leaf_tapes.c's equality, written again here) */
 static bool same_tape(const ism_tape *x, const ism_tape *y)
 {
     if (!x || !y)
         return !x && !y;
-    if (x->len != y->len || x->result != y->result)
+    if (x->len != y->len || x->result != y->result || x->nregs != y->nregs)
         return false;
     for (size_t k = 0; k < x->len; k++)
         if (x->code[k].op != y->code[k].op || x->code[k].out != y->code[k].out ||

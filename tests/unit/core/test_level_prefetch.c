@@ -6,13 +6,16 @@
  * the same corners with a memo of its own, and neither logs an edge the other does not; the
  * prefetch's memo slots, which the build's tests read, hold the roots it logged (a claim
  * writes t = 0 and the store must overwrite it), and ism_cell_error reading them measures
- * each node's error bit for bit as with its own memo. */
+ * each node's error bit for bit as with its own memo. Searched on each node's own shortened
+ * tape (the level build's tape[]: tapes of several groups in one call), the roots are those
+ * found on f's own, edge for edge and bit for bit. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include "core/eval/eval.h"
 #include "core/octree/cell_error.h"
+#include "core/octree/leaf_tapes.h"
 #include "core/octree/level_prefetch.h"
 #include "core/octree/root_table.h"
 #include "core/util/grow.h"
@@ -169,4 +172,112 @@ Test(level_prefetch, lanes_and_the_error_measure_keep_the_same_roots)
         for (int p = -1; p < 2; p++) /* own box, +1e-3, irrational (pf_sweep_box) */
             cr_expect_gt(compare(surfs[sf], p), 100, "%s placement %d: few roots",
                          surfs[sf]->expr, p);
+}
+
+/* Node nd's tape for its roots, as the level build passes it: f shortened over the node's
+ * box (one copy per distinct tape, lt's), else f itself, as NULL or as f's pointer by turns
+ * (both mean f's own). */
+static const ism_tape *own_tape(const ism_grid *g, const ism_node *nd, ism_sampler *s,
+                                ism_tape *scratch, ism_leaf_tapes *lt,
+                                ism_leaf_tapes_cache *cache, size_t i)
+{
+    int32_t w = ism_grid_cell_steps(g, nd->level);
+    ism_interval b[3];
+    for (int a = 0; a < 3; a++)
+        b[a] = (ism_interval){ism_grid_coord(g, a, nd->org[a]),
+                              ism_grid_coord(g, a, nd->org[a] + w)};
+    if (!ism_tape_shorten(s->tape, s->ws, b[0], b[1], b[2], scratch, NULL))
+        return i % 2 ? s->tape : NULL;
+    unsigned k = ism_leaf_tapes_number(lt, cache, scratch);
+    cr_assert(k);
+    return lt->v[k - 1];
+}
+
+/* The prefetch over a level's nodes twice, from empty memos: every root on f's own tape
+ * (tape NULL), and each node's on its own (own_tape). Returns the nodes on a shortened tape. */
+static size_t own_tapes(const pf_surface *surf, int placement)
+{
+    ism_sampler s;
+    ism_tape *t = pf_build_sampler(surf, &s);
+    const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
+    double box[6];
+    ism_grid g = pf_sweep_grid(base, DEPTH, placement, box);
+    const size_t nroots = (size_t)1 << ISM_ROOT_MEMO_BITS;
+    const size_t npoints = (size_t)1 << ISM_CORNER_MEMO_BITS;
+    ism_point_entry *points[2] = {calloc(npoints, sizeof **points),
+                                  calloc(npoints, sizeof **points)};
+    ism_root_entry *memo[2] = {calloc(nroots, sizeof **memo), calloc(nroots, sizeof **memo)};
+    ism_leaf_tapes_cache *cache = calloc(1, sizeof *cache);
+    ism_tape *scratch = ism_tape_new_like(t);
+    ism_leaf_tapes lt;
+    cr_assert(points[0] && points[1] && memo[0] && memo[1] && cache && scratch &&
+              ism_leaf_tapes_init(&lt, NULL));
+    ism_root_log log[2] = {{NULL, 0, 0, (size_t)1 << 24}, {NULL, 0, 0, (size_t)1 << 24}};
+    ism_node_memo nm[2] = {{memo[0], NULL, NULL, &log[0]}, {memo[1], NULL, NULL, &log[1]}};
+    ism_root_entry *sorted = NULL;
+    size_t sorted_cap = 0;
+    const int side = 1 << LEVEL, step = 1 << (DEPTH - LEVEL);
+    ism_node nodes[CHUNK];
+    const ism_node *at[CHUNK];
+    const ism_tape *tape[CHUNK];
+    ism_corners k[CHUNK];
+    bool have[CHUNK];
+    size_t n = 0, shortened = 0, mixed = 0, stale = 0;
+    for (int i = 0; i < side * side * side; i++) {
+        nodes[n] = (ism_node){{(i % side) * step, (i / side % side) * step,
+                               (i / side / side) * step}, -1, LEVEL, ISM_NODE_LEAF, 0, 0};
+        at[n] = &nodes[n];
+        tape[n] = own_tape(&g, &nodes[n], &s, scratch, &lt, cache, (size_t)i);
+        shortened += tape[n] && tape[n] != t;
+        if (++n < CHUNK && i + 1 < side * side * side)
+            continue;
+        for (size_t j = 1; j < n; j++)
+            if (tape[j] != tape[0]) {
+                mixed++; /* the call groups the nodes tape by tape (prefetch_roots) */
+                break;
+            }
+        ism_prefetch_nodes(&nm[0], points[0], ISM_CORNER_MEMO_BITS, &g, at, NULL, n, &s, k,
+                           have);
+        ism_prefetch_nodes(&nm[1], points[1], ISM_CORNER_MEMO_BITS, &g, at, tape, n, &s, k,
+                           have);
+        /* each slot holds the root its own prefetch logged for its edge */
+        for (int w = 0; w < 2; w++) {
+            cr_assert(ism_grow((void **)&sorted, &sorted_cap, log[w].n + 1, sizeof *sorted, 256));
+            stale += stale_slots(memo[w], nroots, &log[w], sorted);
+        }
+        n = 0;
+    }
+    size_t na = distinct(&log[0]), nb = distinct(&log[1]);
+    cr_expect_eq(na, nb, "%s: %zu edges searched on f, %zu on own tapes", surf->expr, na, nb);
+    for (size_t i = 0; i < na && i < nb; i++)
+        cr_expect(log[0].v[i].a == log[1].v[i].a && log[0].v[i].b == log[1].v[i].b &&
+                      memcmp(&log[0].v[i].t, &log[1].v[i].t, sizeof(double)) == 0,
+                  "%s: edge %zu: root %.17g on f, %.17g on its own tape", surf->expr, i,
+                  log[0].v[i].t, log[1].v[i].t);
+    cr_expect_eq(stale, 0, "%s: %zu memo slots hold a root other than the logged one",
+                 surf->expr, stale);
+    /* not vacuous: shortened tapes, chunks of several tapes, and roots compared */
+    cr_expect(shortened > 100 && mixed > 4 && na > 100,
+              "%s: %zu nodes on shortened tapes, %zu mixed chunks, %zu roots", surf->expr,
+              shortened, mixed, na);
+    for (int w = 0; w < 2; w++) {
+        ism_root_log_free(&log[w]);
+        free(points[w]);
+        free(memo[w]);
+    }
+    ism_leaf_tapes_free(&lt);
+    free(cache);
+    free(sorted);
+    ism_tape_free(scratch);
+    ism_eval_ws_free(s.ws);
+    ism_tape_free(t);
+    return shortened;
+}
+
+Test(level_prefetch, roots_on_own_shortened_tapes_as_on_f)
+{
+    const pf_surface *surfs[] = {&pf_barth_sextic, &pf_gyroid_ball};
+    for (int sf = 0; sf < 2; sf++)
+        for (int p = -1; p < 2; p++) /* own box, +1e-3, irrational (pf_sweep_box) */
+            own_tapes(surfs[sf], p);
 }
