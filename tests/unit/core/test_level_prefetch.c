@@ -71,13 +71,19 @@ static size_t stale_slots(const ism_root_entry *memo, size_t nroots, const ism_r
     return bad;
 }
 
+/* The lattice over ±HALF at DEPTH, in placement (pf_sweep_box). */
+static ism_grid level_grid(int placement)
+{
+    const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
+    double box[6];
+    return pf_sweep_grid(base, DEPTH, placement, box);
+}
+
 static size_t compare(const pf_surface *surf, int placement)
 {
     ism_sampler s;
     ism_tape *t = pf_build_sampler(surf, &s);
-    const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
-    double box[6];
-    ism_grid g = pf_sweep_grid(base, DEPTH, placement, box);
+    ism_grid g = level_grid(placement);
     const size_t nroots = (size_t)1 << ISM_ROOT_MEMO_BITS;
     ism_point_entry *points = calloc((size_t)1 << ISM_CORNER_MEMO_BITS, sizeof *points);
     ism_root_entry *lanes_memo = calloc(nroots, sizeof *lanes_memo);
@@ -199,9 +205,7 @@ static size_t own_tapes(const pf_surface *surf, int placement)
 {
     ism_sampler s;
     ism_tape *t = pf_build_sampler(surf, &s);
-    const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
-    double box[6];
-    ism_grid g = pf_sweep_grid(base, DEPTH, placement, box);
+    ism_grid g = level_grid(placement);
     const size_t nroots = (size_t)1 << ISM_ROOT_MEMO_BITS;
     const size_t npoints = (size_t)1 << ISM_CORNER_MEMO_BITS;
     ism_point_entry *points[2] = {calloc(npoints, sizeof **points),
