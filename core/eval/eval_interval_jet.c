@@ -15,9 +15,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The (i, j) index pairs of the six Hessian entries. */
-static const int HI[6] = { 0, 0, 0, 1, 1, 2 };
-static const int HJ[6] = { 0, 1, 2, 1, 2, 2 };
+/* The (i, j) index pairs of the six Hessian entries (interval_jet_ws.h). */
+#define HI ism_ivjet_hi
+#define HJ ism_ivjet_hj
 
 ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
 {
@@ -42,6 +42,7 @@ ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
     ws->lane_kinks = NULL;
     ws->lane_kink_at = NULL;
     ws->lane_nkink_at = 0;
+    ws->jet_regs = ws->jet_hregs = NULL;
     if (!ws->r || !ws->kept) {
         free(ws->r);
         free(ws->kept);
@@ -61,6 +62,8 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws)
     free(ws->lane_kept);
     free(ws->lane_kinks);
     free(ws->lane_kink_at);
+    free(ws->jet_regs);
+    free(ws->jet_hregs);
     free(ws);
 }
 
@@ -72,40 +75,20 @@ static ism_interval ivc(double c) { return iv(c, c); }
  * heart's interval gradients 85.8M -> 80.9M instructions in bench_singular. */
 #define ALWAYS_INLINE inline __attribute__((always_inline))
 
-/* What one instruction computes, as bits: D(k) the partial in variable k, H(e) the Hessian
- * entry e, SECOND whether Hessian entries are kept at all (without it they are left
- * untouched: unused). A first partial outside the bits is one in a variable the
- * instruction's value does not depend on (the tape's free_of): the rules below make it
- * exactly 0 (every exact 0 stays one, see is_zero), so it is written as 0 without work and
- * the results are bit for bit those of computing it. Second partials likewise, but only
- * for values no kink feeds (the tape's smooth): at a kink set_whole_derivs makes the mixed
- * entry (x, z) of a value free of z the whole line when its x partial is not 0. On the
+/* What one instruction computes, as bits (interval_jet_ws.h's ISM_IVJ_*): D(k) the partial
+ * in variable k, H(e) the Hessian entry e, SECOND whether Hessian entries are kept at all
+ * (without it they are left untouched: unused). A first partial outside the bits is one in
+ * a variable the instruction's value does not depend on (the tape's free_of): the rules
+ * below make it exactly 0 (every exact 0 stays one, see is_zero), so it is written as 0
+ * without work and the results are bit for bit those of computing it. Second partials
+ * likewise, but only for values no kink feeds (the tape's smooth; ism_ivjet_want). On the
  * heart's tape 8 of 14 instructions depend on fewer than three variables. */
-#define D(k) (1u << (k))
-#define H(e) (8u << (e))
-#define SECOND (1u << 9)
-#define H_ALL (H(0) | H(1) | H(2) | H(3) | H(4) | H(5))
+#define D(k) ISM_IVJ_D(k)
+#define H(e) ISM_IVJ_H(e)
+#define SECOND ISM_IVJ_SECOND
 #define DO_D(w, k) (((w) & D(k)) != 0)
 #define DO_H(w, e) (((w) & H(e)) != 0)
-
-/* The H bits of each set of variables (bit 0 x, 1 y, 2 z): entry (i, j) needs both i, j. */
-static const unsigned H_OF[8] = {
-    0u,                              /* none */
-    H(0),                            /* x: xx */
-    H(3),                            /* y: yy */
-    H(0) | H(1) | H(3),              /* x y */
-    H(5),                            /* z: zz */
-    H(0) | H(2) | H(5),              /* x z */
-    H(3) | H(4) | H(5),              /* y z */
-    H_ALL,
-};
-
-/* The bits for an instruction whose value depends on the variables in deps, in the first
- * or the second-order pass; smooth: nothing that may kink feeds it (tape.h). */
-static inline unsigned want_of(unsigned deps, int second, bool smooth)
-{
-    return !second ? deps : deps | SECOND | (smooth ? H_OF[deps] : H_ALL);
-}
+#define want_of ism_ivjet_want
 
 /* Exact zeros stay exact (outward rounding would widen 0 to ±2^-1074): a derivative that is
  * exactly 0 says the register does not depend on that variable, which the kink rule uses. */
@@ -207,7 +190,8 @@ static ALWAYS_INLINE void each_hess(ism_ivjet *o, const ism_ivjet *a,
 }
 
 /* Applies fn(., c) to the value and every derivative of a. */
-static ALWAYS_INLINE void each(ism_ivjet *o, const ism_ivjet *a, ism_interval (*fn)(ism_interval, double),
+static ALWAYS_INLINE void each(ism_ivjet *o, const ism_ivjet *a,
+                               ism_interval (*fn)(ism_interval, double),
                  double c, unsigned w)
 {
     o->v = fn(a->v, c);
@@ -382,7 +366,8 @@ static ALWAYS_INLINE void add_hess(ism_ivjet *o, const ism_ivjet *a, const ism_i
                               : addz(a->h[e], b->h[e]);
 }
 
-static ALWAYS_INLINE void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sub, unsigned w)
+static ALWAYS_INLINE void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, int sub,
+                                 unsigned w)
 {
     ism_interval (*fn)(ism_interval, ism_interval) = sub ? subz : addz;
     o->v = sub ? iv_sub(a->v, b->v) : iv_add(a->v, b->v);

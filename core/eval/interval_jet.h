@@ -109,4 +109,14 @@ size_t ism_ivjet_lane_kinks(const ism_tape *t, const ism_ivjet_ws *ws,
 size_t ism_eval_interval_jet(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                              const uint8_t *force, uint8_t *kinks, ism_ivjet *out);
 
+/* ism_eval_interval_jet over box[0..n) (n <= ISM_IVGRAD_BATCH) at once, no branch forced
+ * and no kinks wanted: out[k] bit for bit what ism_eval_interval_jet(t, ws, box[k], NULL,
+ * NULL, &out[k]) gives. Its registers are its own: the last batched gradient pass (its
+ * records, kinks and registers) and the scalar passes' registers stand as they were. False,
+ * computing nothing, where ism_eval_interval_grad_lanes refuses t (an operation besides the
+ * affine ones, +, −, ×, squares, integer powers, min, max and abs), ws does not fit t or
+ * cannot grow, or n is 0 or too many: then take the boxes one by one. */
+bool ism_eval_interval_jet_lanes(const ism_tape *t, ism_ivjet_ws *ws,
+                                 const ism_interval (*box)[3], size_t n, ism_ivjet *out);
+
 #endif

@@ -62,8 +62,47 @@ struct ism_ivjet_ws {
     uint32_t lane_nk[ISM_IVGRAD_BATCH];
     uint32_t *lane_kink_at;
     size_t lane_nkink_at;
+    /* The batched second-order pass's registers (ism_eval_interval_jet_lanes; made on its
+     * first use, nregs of them): values and first partials as lane_regs lays them out, and
+     * each register's six Hessian entries (ISM_IVG_GROUPS groups of 12 vectors). Apart from
+     * lane_regs so that the jets leave the batched gradient pass standing. */
+    double *jet_regs;
+    double *jet_hregs;
 };
 _Static_assert(ISM_IVGRAD_BATCH <= 8, "a lane's kink is one bit of lane_kinks' bytes");
+
+/* What one instruction of a pass computes, as bits (eval_interval_jet.c's want bits): D(k)
+ * the partial in variable k, H(e) the Hessian entry e (xx xy xz yy yz zz), SECOND whether
+ * the pass keeps Hessian entries at all. */
+#define ISM_IVJ_D(k) (1u << (k))
+#define ISM_IVJ_H(e) (8u << (e))
+#define ISM_IVJ_SECOND (1u << 9)
+#define ISM_IVJ_H_ALL (ISM_IVJ_H(0) | ISM_IVJ_H(1) | ISM_IVJ_H(2) | ISM_IVJ_H(3) | ISM_IVJ_H(4) \
+                       | ISM_IVJ_H(5))
+
+/* The (i, j) index pairs of the six Hessian entries. */
+static const int ism_ivjet_hi[6] = { 0, 0, 0, 1, 1, 2 };
+static const int ism_ivjet_hj[6] = { 0, 1, 2, 1, 2, 2 };
+
+/* The bits for an instruction whose value depends on the variables in deps (bit 0 x, 1 y,
+ * 2 z), in the first (second = 0) or the second-order pass; smooth: nothing that may kink
+ * feeds it (tape.h). A Hessian entry (i, j) is wanted where both i and j are in deps, every
+ * entry where a kink may feed the value (set_whole_derivs makes the mixed entry (x, z) of a
+ * value free of z the whole line at a kink when its x partial is not 0). */
+static inline unsigned ism_ivjet_want(unsigned deps, int second, bool smooth)
+{
+    static const unsigned h_of[8] = {
+        0u,                                                 /* none */
+        ISM_IVJ_H(0),                                       /* x: xx */
+        ISM_IVJ_H(3),                                       /* y: yy */
+        ISM_IVJ_H(0) | ISM_IVJ_H(1) | ISM_IVJ_H(3),         /* x y */
+        ISM_IVJ_H(5),                                       /* z: zz */
+        ISM_IVJ_H(0) | ISM_IVJ_H(2) | ISM_IVJ_H(5),         /* x z */
+        ISM_IVJ_H(3) | ISM_IVJ_H(4) | ISM_IVJ_H(5),         /* y z */
+        ISM_IVJ_H_ALL,
+    };
+    return !second ? deps : deps | ISM_IVJ_SECOND | (smooth ? h_of[deps & 7u] : ISM_IVJ_H_ALL);
+}
 
 /* Operations whose Hessian hess_only computes from the operands' kept values and first
  * partials alone (eval_interval_jet.c), and the only ones the batched pass computes. */

@@ -64,6 +64,13 @@ _Static_assert(SEARCH_PROJECT_RUN <= ISM_SING_NEWTON_LANES,
  * X's own Newton run would have found in its grown box: the four cells round the cross-cap's
  * axis, a lattice line, all converge onto the axis at their common height. */
 #define SEARCH_SHARE_REL 1e-6
+/* Jets of a parent's children taken in lanes (pre_jets) at the least; fewer are taken one by
+ * one. One 4-lane group of ism_eval_interval_jet_lanes costs ~9,100 instructions on Klein's
+ * tape (Hessians from the gradient pass's records) against ~5,200 for one box's jet from
+ * its record, and ~12,000 on Barth's (its own pass: min/max keep no records) against
+ * ~6,450 (callgrind, bench_error mesh klein-bottle 0.0141 / barth-sextic 0.0259): lanes
+ * pay from two jets up. */
+#define PRE_JETS_MIN 2
 /* Below this many frontier cells a level runs on the calling thread (thread start-up
  * costs more than the work). */
 #define SEARCH_PARALLEL_MIN 64
@@ -313,9 +320,23 @@ static void centre_at(const search *s, worker *w, const ism_interval x[3], ism_d
  * siblings' in one batch (pre_gradients), when ok. */
 typedef struct pre_grad {
     bool ok, at_ok; /* g taken; at taken too */
+    bool jet_ok;    /* jet taken too (pre_jets) */
     ism_ivgrad g, at;
     uint32_t nk; /* the box's free kinks (their bytes: ism_ivjet_lane_kinks) */
+    ism_ivjet jet;  /* the jet over the box smooth_tests takes (pre_jets) */
 } pre_grad;
+
+/* smooth_tests' first test, the mean-value form of F round x's centre cx (a point
+ * interval; at: f there, g: ∇F over x): whether f(c) + ∇F(X)·(X − c) holds 0, X − c into
+ * dx. In one place for smooth_tests and pre_jets, which takes the jets of exactly the
+ * cells it passes. */
+static bool first_order_holds(const ism_interval x[3], const ism_interval cx[3],
+                              const ism_ivgrad *at, const ism_ivgrad *g, ism_interval dx[3])
+{
+    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+        dx[k] = iv_sub(x[k], cx[k]);
+    return holds0(add_linear(at->v, g->d, dx));
+}
 
 /* Krawczyk's test on the cell x from its model m (∇f at the centre, the Hessian over x).
  * Its own function: inlined into smooth_tests, GCC 12 takes m's members for 8-byte regions
@@ -333,16 +354,17 @@ static int smooth_tests(const search *s, worker *w, const ism_interval x[3], con
 {
     ism_interval cx[3], dx[3];
     centre_at(s, w, x, m, cx, pre && pre->ok && pre->at_ok ? &pre->at : NULL);
-    _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-        dx[k] = iv_sub(x[k], cx[k]);
-    if (!holds0(add_linear(m->at.v, g->d, dx)))
+    if (!first_order_holds(x, cx, &m->at, g, dx))
         return EXCLUDED;
     /* The cell's own jet only. The parent's (no evaluation, round the cell's centre) drops no
      * cell the own jet keeps (jet_excludes: inclusion-monotone); it only spared a jet, and
      * cost more than it spared: 0 of the 160 cells reaching it dropped on the torus, 126 of
      * 2,682 on kummer-16-nodes. Search instructions without it at E 0.0141 (bench_error mesh
      * S 0.0141 10, callgrind): torus 2.67M -> 2.47M, kummer-16-nodes 69.8M -> 67.5M. */
-    ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &m->box);
+    if (pre && pre->jet_ok) /* taken beforehand (pre_jets), bit for bit; counted now */
+        m->box = pre->jet;
+    else
+        ism_eval_interval_jet(s->t, w->jw, x, NULL, NULL, &m->box);
     w->evals_jet++;
     if (jet_excludes(&m->at, &m->box, dx))
         return EXCLUDED;
@@ -901,29 +923,31 @@ static void finish(search *s, worker *w, task_out *out, scell *c, const ism_inte
  * Without centres (a parent without a model: no centre test; only on tapes with kinks) the
  * children's centres are left to centre_at: few of those children reach smooth_tests (Barth
  * at E 0.0259: with the centres 1,287.5M instructions, without 1,273.1M, one by one
- * 1,284.2M). */
-static void pre_gradients(const search *s, worker *w, const int v[8], const ism_interval *bx,
-                          const ism_interval *by, const ism_interval *bz,
-                          const ism_interval *const fc[8], ism_interval q, bool centres,
-                          pre_grad pre[8])
+ * 1,284.2M). The children from `from` on are looked at (pre[m] reset for those); returns
+ * the child after the last one taken, 8 when none is left or there is no batch. */
+static int pre_gradients(const search *s, worker *w, const int v[8], const ism_interval *bx,
+                         const ism_interval *by, const ism_interval *bz,
+                         const ism_interval *const fc[8], ism_interval q, bool centres,
+                         int from, pre_grad pre[8])
 {
     ism_interval box[ISM_IVGRAD_BATCH][3];
     ism_ivgrad g[ISM_IVGRAD_BATCH];
     int kid[ISM_IVGRAD_BATCH];
     size_t n = 0, most = centres ? ISM_IVGRAD_BATCH / 2 : ISM_IVGRAD_BATCH;
-    for (int m = 0; m < 8; m++)
-        pre[m].ok = false;
+    for (int m = from; m < 8; m++)
+        pre[m].ok = pre[m].jet_ok = false;
     /* without centres only with kinks: on smooth tapes the torus's search paid more for
      * those batches than one by one (expand_cell) */
     if (!s->batch || (!centres && !s->branches))
-        return;
-    for (int m = 0; m < 8 && n < most; m++)
+        return 8;
+    int m = from;
+    for (; m < 8 && n < most; m++)
         if (v[m] == OPEN && !centre_drops(fc[m], q))
             kid[n++] = m;
     /* a lone box without its centre: one 4-lane group (~2,100 instructions) against its pass
      * alone (~1,700; interval_jet.h's ISM_IVGRAD_BATCH figures): one by one */
     if (!centres && n < 2)
-        return;
+        return 8;
     for (size_t k = 0; k < n; k++) {
         int m = kid[k];
         ism_interval x[3] = { bx[m], by[m], bz[m] };
@@ -940,10 +964,60 @@ static void pre_gradients(const search *s, worker *w, const int v[8], const ism_
     const ism_interval (*b)[3] = (const ism_interval (*)[3])box;
     if (!n || !(s->branches ? ism_eval_interval_grad_lanes(s->t, w->jw, b, nb, g, nk)
                             : ism_eval_interval_grad_batch(s->t, w->jw, b, nb, g)))
-        return;
-    for (size_t k = 0; k < n; k++)
-        pre[kid[k]] = (pre_grad){ true, centres, g[k], centres ? g[n + k] : g[k], nk[k] };
+        return 8;
+    for (size_t k = 0; k < n; k++) { /* field by field: jet is written by pre_jets alone */
+        pre_grad *p = &pre[kid[k]];
+        p->ok = true;
+        p->at_ok = centres;
+        p->g = g[k];
+        p->at = centres ? g[n + k] : g[k];
+        p->nk = nk[k];
+    }
     w->grads_batched += n;
+    return m;
+}
+
+/* After pre_gradients with centres over the children from..to: the jets over the boxes of
+ * those whose smooth_tests will take one (classify's and smooth_tests' tests on what
+ * pre_gradients took, the same functions: no free kink, ∇F may vanish,
+ * first_order_holds), in one ism_eval_interval_jet_lanes (bit for bit the one-by-one jets;
+ * Hessians alone from the batch's records on tapes without kinks), into pre[m].jet; a lone
+ * one (PRE_JETS_MIN) by ism_eval_interval_jet, now, while its record stands. Klein at E
+ * 0.00327: the search's jets ~45M -> ~30M instructions, 157.9M -> 146.0M in all. */
+static void pre_jets(const search *s, worker *w, const int v[8], const ism_interval *bx,
+                     const ism_interval *by, const ism_interval *bz,
+                     const ism_interval *const fc[8], ism_interval q, int from, int to,
+                     pre_grad pre[8])
+{
+    ism_interval box[ISM_IVGRAD_BATCH][3];
+    ism_ivjet jet[ISM_IVGRAD_BATCH];
+    int kid[ISM_IVGRAD_BATCH];
+    size_t n = 0;
+    for (int m = from; m < to && n < ISM_IVGRAD_BATCH; m++) {
+        const pre_grad *p = &pre[m];
+        if (v[m] != OPEN || centre_drops(fc[m], q) || !p->ok || !p->at_ok || p->nk ||
+            !grad_may_vanish(p->g.d))
+            continue;
+        ism_interval x[3] = { bx[m], by[m], bz[m] }, cx[3], dx[3];
+        double c[3];
+        centre_of(x, c);
+        _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
+            cx[k] = iv(c[k], c[k]);
+        if (!first_order_holds(x, cx, &p->at, &p->g, dx))
+            continue;
+        memcpy(box[n], x, sizeof x);
+        kid[n++] = m;
+    }
+    if (!n)
+        return;
+    if (n < PRE_JETS_MIN) /* one by one, now: from the pass's record, before the next pass */
+        ism_eval_interval_jet(s->t, w->jw, box[0], NULL, NULL, &jet[0]);
+    else if (!ism_eval_interval_jet_lanes(s->t, w->jw, (const ism_interval (*)[3])box, n, jet))
+        return;
+    for (size_t k = 0; k < n; k++) {
+        pre[kid[k]].jet = jet[k];
+        pre[kid[k]].jet_ok = true;
+    }
 }
 
 /* Expands p: its eight children's F intervals in one batch, screened; then, when p has a
@@ -987,7 +1061,7 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
             ism_interval x[3] = { bx[m], by[m], bz[m] };
             v[m] = screen(w, &kids[m], x, f[m], NULL, 0);
         }
-        pre_gradients(s, w, v, bx, by, bz, none, iv(0.0, 0.0), false, pre);
+        pre_gradients(s, w, v, bx, by, bz, none, iv(0.0, 0.0), false, 0, pre);
         for (int m = 0; m < 8; m++) {
             ism_interval x[3] = { bx[m], by[m], bz[m] };
             finish(s, w, out, &kids[m], x, f[m], v[m], NULL, iv(0.0, 0.0), &km, &pre[m]);
@@ -1026,7 +1100,14 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
     for (int m = 0; m < 8; m++)
         at[m] = lane[m] == SIZE_MAX ? NULL : &fc[lane[m]];
     pre_grad pre[8];
-    pre_gradients(s, w, v, bx, by, bz, at, q, true, pre);
+    /* the children in rounds of ISM_IVGRAD_BATCH / 2, each round's jets taken before the
+     * next round's pass overwrites its records; with kinks one round (classify reads the
+     * last pass's kink bytes and registers, ism_ivjet_lane_kinks, ism_ivjet_top_pieces) */
+    for (int from = 0; from < 8;) {
+        int to = pre_gradients(s, w, v, bx, by, bz, at, q, true, from, pre);
+        pre_jets(s, w, v, bx, by, bz, at, q, from, to, pre);
+        from = s->branches ? 8 : to;
+    }
     for (int m = 0; m < 8; m++) {
         ism_interval x[3] = { bx[m], by[m], bz[m] };
         finish(s, w, out, &kids[m], x, f[m], v[m], at[m], q, &km, &pre[m]);
