@@ -141,6 +141,18 @@ static int32_t face_neighbour(const ism_octree *t, const int32_t *parent, int32_
     return find_near(t, parent, node, o, t->nodes[node].level);
 }
 
+/* The node across node's face (axis, side): face_neighbour asked with the origin of the cell
+ * of node's size beyond the face (parent may be NULL). */
+static int32_t across(const ism_octree *t, const int32_t *parent, int32_t node, int axis,
+                      int side)
+{
+    const ism_node *nd = &t->nodes[node];
+    int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
+    int32_t o[3] = {nd->org[0], nd->org[1], nd->org[2]};
+    o[axis] += side ? s : -s;
+    return face_neighbour(t, parent, node, axis, side, o);
+}
+
 /* The tiles of the face (axis, side) of node nd whose neighbour across it is j (-1: none). */
 static bool face_tiles_from(const ism_octree *t, const ism_node *nd, int32_t j, int axis,
                             int side, tile_emit emit, void *ctx)
@@ -199,7 +211,11 @@ bool ism_octree_node_tiles(const ism_octree *t, const int32_t *parent, int32_t n
                            bool (*emit)(void *ctx, int face, const ism_tile *tile), void *ctx)
 {
     int32_t nb[6];
-    node_neighbours(t, parent, node, nb);
+    if (parent)
+        node_neighbours(t, parent, node, nb);
+    else /* no ancestors to climb: each neighbour searched from the root */
+        for (int face = 0; face < 6; face++)
+            nb[face] = across(t, NULL, node, face / 2, face % 2);
     const ism_node *nd = &t->nodes[node];
     for (int face = 0; face < 6; face++)
         if (!face_tiles_from(t, nd, nb[face], face / 2, face % 2, emit, ctx))
@@ -223,11 +239,7 @@ static bool emit_one_face(void *ctx, int face, const ism_tile *tile)
 bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t node, int axis,
                            int side, bool (*emit)(void *ctx, const ism_tile *tile), void *ctx)
 {
-    const ism_node *nd = &t->nodes[node];
-    int32_t s = ism_grid_cell_steps(&t->grid, nd->level);
-    int32_t o[3] = {nd->org[0], nd->org[1], nd->org[2]};
-    o[axis] += side ? s : -s;
-    int32_t j = face_neighbour(t, parent, node, axis, side, o);
     one_face of = {emit, ctx};
-    return face_tiles_from(t, nd, j, axis, side, emit_one_face, &of);
+    return face_tiles_from(t, &t->nodes[node], across(t, parent, node, axis, side), axis, side,
+                           emit_one_face, &of);
 }

@@ -143,9 +143,10 @@ bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t n
 
 /* ism_octree_face_tiles of the node's six faces in one pass, face 2 × axis + side from 0 to
  * 5, each face's tiles in that call's order, emit told the face: the node's ancestors are
- * climbed once (parent, not NULL) and each face's neighbour is found from them (the node's
- * path with the face's bit flipped below their common ancestor), with no search from a
- * lattice point. Returns false if emit does. */
+ * climbed once (parent) and each face's neighbour is found from them (the node's path with
+ * the face's bit flipped below their common ancestor), with no search from a lattice point;
+ * with parent NULL, each searched from the root as ism_octree_face_tiles does. Returns false
+ * if emit does. */
 bool ism_octree_node_tiles(const ism_octree *t, const int32_t *parent, int32_t node,
                            bool (*emit)(void *ctx, int face, const ism_tile *tile), void *ctx);
 

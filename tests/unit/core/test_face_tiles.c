@@ -5,8 +5,9 @@
  * and the gyroid in a ball, three box placements) and each of its 6 faces, both emit the same
  * tiles in the same order, and every tile lies in that face. ism_octree_node_tiles (all six
  * faces in one climb of the node's ancestors, each neighbour found by flipping the face's bit
- * of the node's path) against the same oracle face by face: the same tiles bit for bit, each
- * told its own face, on the torus, Barth's sextic and the gyroid ball. */
+ * of the node's path; without parents, each searched from the root) against the same oracle
+ * face by face: the same tiles bit for bit, each told its own face, on the torus, Barth's
+ * sextic and the gyroid ball. */
 #include <criterion/criterion.h>
 #include <stdlib.h>
 #include <string.h>
@@ -133,9 +134,8 @@ static void from_the_parent(const ism_octree *tree, const int32_t *parent, size_
     }
 }
 
-/* node_tiles' list is, face after face, what ism_octree_face_tiles answers from the root (no
- * parents) for that face, bit for bit, each tile told that face. */
-static void one_pass(const ism_octree *tree, const int32_t *parent, size_t i, sweep *w)
+/* node_tiles' list from parent (NULL: none) against the face-by-face oracle (one_pass). */
+static void one_pass_from(const ism_octree *tree, const int32_t *parent, size_t i, sweep *w)
 {
     w->all.n = 0;
     cr_assert(ism_octree_node_tiles(tree, parent, (int32_t)i, keep_with_face, &w->all));
@@ -160,6 +160,15 @@ static void one_pass(const ism_octree *tree, const int32_t *parent, size_t i, sw
     }
     cr_assert_eq(at, w->all.n, "placement %d node %zu: %zu tiles in one pass, %zu face by face",
                  w->placement, i, w->all.n, at);
+}
+
+/* node_tiles' list, from the parents and without them (parent NULL: each neighbour searched
+ * from the root), is face after face what ism_octree_face_tiles answers from the root (no
+ * parents) for that face, bit for bit, each tile told that face. */
+static void one_pass(const ism_octree *tree, const int32_t *parent, size_t i, sweep *w)
+{
+    one_pass_from(tree, parent, i, w);
+    one_pass_from(tree, NULL, i, w);
 }
 
 /* The sweep of check over s, its finer faces (the walk down the neighbour is exercised, not
