@@ -39,9 +39,11 @@ typedef struct ism_cell_ctx {
                                  the crease, left it unresolved (the sides then fanned from
                                  their centres: max_error 0) */
     bool walk_every_tile;     /* the tile memos (cell_cache.h) are neither asked nor filled,
-                                 and no tile is taken as quiet by its corners alone
-                                 (poly_options.h's walk_every_tile: the reference the tests
-                                 compare memo hits and that shortcut with) */
+                                 and no tile is taken as quiet by its corners alone (each
+                                 such answer is checked against the tile's walk instead:
+                                 corner_checks, corner_mismatches) (poly_options.h's
+                                 walk_every_tile: the reference the tests compare memo hits
+                                 and that shortcut with) */
     /* scratch, reused from node to node */
     ism_bpoint *bp;
     size_t nbp, cap_bp;
@@ -68,6 +70,9 @@ typedef struct ism_cell_ctx {
     uint64_t quiet_skips;     /* tiles found in the quiet memo: not walked again */
     uint64_t tile_replays;    /* tiles whose lines were copied from the crossed-tile memo */
     uint64_t corner_quiets;   /* tiles quiet by their corners alone: their sides not walked */
+    uint64_t corner_checks;   /* under walk_every_tile: tiles quiet by their corners alone,
+                                 walked all the same (face_lines.c check_by_corners) */
+    uint64_t corner_mismatches; /* ... and tiles where that answer and the walk differ */
     uint64_t corner_values;   /* lattice points whose f and ∇f came from `corners` */
 } ism_cell_ctx;
 

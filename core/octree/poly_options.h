@@ -78,8 +78,10 @@ typedef struct ism_poly_options {
                                tiles another node of the thread walked in the round (quiet
                                ones, and crossed ones whose lines and counts a hit copies:
                                cell_cache.h), and every tile walked side by side, even one
-                               quiet by its corners alone (face_lines.c) — the same mesh bit
-                               for bit, for more; on is for tests (default off) */
+                               quiet by its corners alone (face_lines.c; that answer is then
+                               checked against the walk: ism_poly_stats' corner_mismatches) —
+                               the same mesh bit for bit, for more; on is for tests (default
+                               off) */
     bool full_tape;         /* every leaf evaluates f itself, not f shortened by intervals over
                                its box (octree.h) — the same mesh bit for bit, for more; on is
                                for tests (default off) */

@@ -306,11 +306,11 @@ static bool leaf_measured(phase2 *p, ism_cell_ctx *cx, size_t i, ism_cell_out *o
 /* Leaf i's first attempt (its output from v0, t0, s0 on; its stats were *before) undone
  * and the leaf polygonised and measured into *e again, as cx now says (one_leaf's retries:
  * with the crease cut, or back to the fan); no fold test. Only cx->stats is reset: the
- * thread's cache and memo counters (quiet_skips, tile_replays, corner_values) count both
- * attempts, as they count the work done. The fold test that asks for a retry costs little
- * where no leaf folds: steiner-roman (locus known, default bound, one thread) spends 2.35M in
- * ism_crease_split and 1.43M in ism_crease_unresolved of ism_polygonise's 1,479.5M (0.26%,
- * callgrind). */
+ * thread's cache and memo counters (quiet_skips, tile_replays, corner_quiets, corner_values,
+ * corner_checks) count both attempts, as they count the work done. The fold test that asks
+ * for a retry costs little where no leaf folds: steiner-roman (locus known, default bound, one
+ * thread) spends 2.35M in ism_crease_split and 1.43M in ism_crease_unresolved of
+ * ism_polygonise's 1,479.5M (0.26%, callgrind). */
 static bool leaf_again(phase2 *p, ism_cell_ctx *cx, size_t i, ism_cell_out *out, size_t v0,
                        size_t t0, size_t s0, const ism_cell_stats *before, double *e)
 {
@@ -511,6 +511,8 @@ static void add_cell_stats(ism_poly_stats *st, const ism_cell_ctx *cx)
     st->quiet_skips += cx->quiet_skips;
     st->tile_replays += cx->tile_replays;
     st->corner_quiets += cx->corner_quiets;
+    st->corner_checks += cx->corner_checks;
+    st->corner_mismatches += cx->corner_mismatches;
     st->corner_values += cx->corner_values;
     st->evals_point += cx->s.n_point;
     st->evals_gradient += cx->s.n_gradient;

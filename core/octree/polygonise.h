@@ -100,6 +100,11 @@ typedef struct ism_poly_stats {
                                     thread's first walk (cell_cache.h's crossed-tile memo) */
     uint64_t corner_quiets;      /* tiles a node did not walk: quiet by their corners alone
                                     (face_lines.c quiet_by_corners) */
+    uint64_t corner_checks;      /* under walk_every_tile (for tests): tiles quiet by their
+                                    corners alone, walked all the same and checked against
+                                    the walk (face_lines.c check_by_corners) ... */
+    uint64_t corner_mismatches;  /* ... and those checks, of any tile walked, that failed: the
+                                    corners' answer and the walk's differ (0 where f is finite) */
     uint64_t corner_values;      /* lattice points whose f and ∇f the cells took from the
                                     octree build's corner memo instead of evaluating them
                                     (octree_build.h's corner_memos), over all rounds */
