@@ -24,7 +24,6 @@
 #include "core/eval/avx2_clone.h"
 #include "core/eval/interval_lanes.h"
 #include "core/eval/interval_ops.h"
-#include "core/eval/interval_trig.h"
 #include "core/eval/threaded.h"
 #include "core/eval/workspace.h"
 
@@ -198,13 +197,14 @@ static void run_nearest(const ism_instr *in, double *ol, double *onh, const doub
 
 /* sin or cos four lanes at a time in round-to-nearest: each lane iv_sin / iv_cos of its box
  * bit for bit (interval_lanes.h's v_sin_at / v_cos_at, the same IEEE operations), its bounds'
- * libm pairs from the workspace's memo as the single-box pass takes them (interval_trig.h),
- * none for a lane that does not resolve (it gets [-1, 1]). The bounds stay within [-1, 1], so
- * sane() would change none. Compiled twice (avx2_clone.h) and never inlined: inlined into
- * chunks it cost tapes without sines 0.08% (Klein bottle at E = 0.0141: chunks_avx2 +0.50M,
- * callgrind). Gyroid ball at E = 1e-3 (callgrind, ism_mesh_surface, one thread):
- * box by box with iv_sin / iv_cos, 712,944 libm calls and 116.6M instructions of 125.7M in
- * ism_eval_interval_batch; with these, 2,200 sincos calls and 34.2M in all. */
+ * libm pairs from the workspace's memo (trig_pair.h's ism_trig_pair_libm, as the single-box
+ * pass's interval_trig.h takes them), none for a lane that does not resolve (it gets [-1, 1]).
+ * The bounds stay within [-1, 1], so sane() would change none. Compiled twice (avx2_clone.h)
+ * and never inlined: inlined into chunks it cost tapes without sines 0.08% (Klein bottle at
+ * E = 0.0141: chunks_avx2 +0.50M, callgrind). Gyroid ball at E = 1e-3 (callgrind,
+ * ism_mesh_surface, one thread): box by box with iv_sin / iv_cos, 712,944 libm calls and
+ * 116.6M instructions of 125.7M in ism_eval_interval_batch; with these, 2,200 sincos calls and
+ * 34.2M in all. */
 ISM_AVX2_TWICE(__attribute__((noinline)) void, run_trig,
                (int op, double *restrict ol, double *restrict onh, const double *restrict al,
                 const double *restrict anh, size_t m, rounding mode, ism_trig_cache *trig),

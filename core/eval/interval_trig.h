@@ -2,8 +2,8 @@
  * with the bounds' sines and cosines read from the workspace's memo of libm's pairs
  * (trig_pair.h's second table: what sin and cos return, bit for bit), so the gyroid's sin u
  * and cos u of one interval cost one sincos per bound, and a bound the memo holds none. For
- * the single-box pass (eval_interval.c) and the batched one's lanes (eval_interval_batch.c,
- * which must call it in round-to-nearest: libm and iv_sin_at's down4 / up4 assume it).
+ * the single-box pass (eval_interval.c); the batched pass takes the same memo pairs lane by
+ * lane (eval_interval_batch.c's run_trig, interval_lanes.h's v_sin_at / v_cos_at).
  * glibc's documented error (at most 1 ulp) under iv_sin_at's widening by 4 ulp keeps the
  * bounds sound; the point evaluators' own pairs (sincos.h) have a measured bound, not a
  * proven one, so they are not used here. */
@@ -17,7 +17,9 @@
 
 /* op (ISM_OP_SIN or ISM_OP_COS) over a: from trig's interval entries (trig_pair.h) when one
  * holds a's bits, else both computed into the entry (a's bounds' libm pairs from the memo).
- * An entry holds what this computes for its interval, so a hit is a miss's bits. */
+ * An entry holds what this computes for its interval, so a hit is a miss's bits. Called in
+ * round-to-nearest only (libm and iv_sin_at's down4 / up4 assume it): an entry replays the
+ * bits of the mode it was filled in. */
 static inline ism_interval ism_iv_trig(int op, ism_interval a, ism_trig_cache *trig)
 {
     if (!iv_trig_resolves(a))

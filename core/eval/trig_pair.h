@@ -66,7 +66,8 @@ typedef struct ism_trig_group_pair {
  * ism_iv_trig), kept by the bounds' bits, both from one miss: the gyroid takes sin u and cos u
  * of each of three registers, and a node's neighbours share its intervals on two axes.
  * 2^ISM_TRIG_IV_BITS direct-mapped entries (the index: a hash's top bits). A key starts as
- * a NaN's bits, which no bound looked up has (only intervals that resolve are). */
+ * a NaN's bits, which no bound looked up has (only intervals that resolve are); an empty
+ * entry's s and c are left uninitialised, never read before a miss fills them. */
 #define ISM_TRIG_IV_BITS 6
 #define ISM_TRIG_IV_ENTRIES (1 << ISM_TRIG_IV_BITS)
 #define ISM_TRIG_IV_EMPTY 0x7ff8dead00000000ull

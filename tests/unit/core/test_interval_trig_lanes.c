@@ -25,7 +25,11 @@
 #define CELLS (1 << DEPTH)
 /* Multiples k pi/2, |k| <= HALF_TURNS, each met by boxes that start, end and straddle it. */
 #define HALF_TURNS 12
-#define MAX_BOXES (CELLS * 3 + (2 * HALF_TURNS + 1) * 6 + 8)
+/* Boxes at the edge of may_contain's tolerance (far_boxes): FAR_N multiples of 2 pi, four
+ * phases, two sides, and the edge box with its neighbour one ulp outside. */
+#define FAR_N 8
+#define FAR_BOXES (FAR_N * 4 * 2 * 2)
+#define MAX_BOXES (CELLS * 3 + (2 * HALF_TURNS + 1) * 6 + 8 + FAR_BOXES)
 
 typedef struct boxes {
     ism_interval v[3][MAX_BOXES];
@@ -37,6 +41,48 @@ static void add(boxes *b, ism_interval x, ism_interval y, ism_interval z)
     cr_assert(b->n < MAX_BOXES);
     b->v[0][b->n] = x, b->v[1][b->n] = y, b->v[2][b->n] = z;
     b->n++;
+}
+
+/* may_contain with the tolerance's relative term taken from m instead of the larger bound:
+ * the fixture's check of which term decides an edge box. */
+static int contains_with(ism_interval a, double phase, double m)
+{
+    double tol = ISM_TRIG_TOL_ABS + ISM_TRIG_TOL_REL * m;
+    return holds_integer((a.lo - phase) / (2.0 * M_PI) - tol, (a.hi - phase) / (2.0 * M_PI) + tol);
+}
+
+/* Boxes of width w beside the point phase + 2 pi n, at the edge of interval_ops.h's scalar
+ * may_contain (found by walking ulp by ulp away from the point): side 1 a box ending below it,
+ * the lowest hi that may_contain still counts as holding it; side 0 a box starting above it,
+ * the highest lo. Each with its neighbour one ulp further out, which may_contain does not
+ * count. The scalar form decides both, so a lane form with a smaller tolerance or one taken
+ * from another bound differs on the edge box. For large n (|x| to 9.4e8, under ISM_TRIG_LIMIT)
+ * the relative term 4e-16 |x| decides, not the 1e-12; for |n| = 2 and w = 6 the two bounds'
+ * sizes differ by 6, so the relative term taken from the smaller bound misses the edge. Both
+ * checked here (cr_assert), so the boxes keep testing what they are for. */
+static void far_boxes(boxes *b)
+{
+    static const double ns[FAR_N] = {1 << 18, -(1 << 18), 2.5e6, -2.5e6, 1.5e8, -1.5e8, 2, -2};
+    static const double phases[4] = {M_PI / 2, -M_PI / 2, 0.0, M_PI}; /* sin's, then cos's */
+    for (int i = 0; i < FAR_N; i++)
+        for (int p = 0; p < 4; p++)
+            for (int side = 0; side < 2; side++) {
+                double w = fabs(ns[i]) == 2 ? 6.0 : 0.01, ph = phases[p];
+                double x = ph + 2.0 * M_PI * ns[i], out = side ? -INFINITY : INFINITY;
+                ism_interval e = side ? (ism_interval){x - w, x} : (ism_interval){x, x + w}, o;
+                for (int steps = 0;; steps++, e = o) {
+                    double y = nextafter(side ? e.hi : e.lo, out);
+                    o = side ? (ism_interval){y - w, y} : (ism_interval){y, y + w};
+                    if (!may_contain(o.lo, o.hi, ph, 2 * M_PI))
+                        break;
+                    cr_assert(steps < 1 << 16);
+                }
+                cr_assert(may_contain(e.lo, e.hi, ph, 2 * M_PI));
+                double m = w == 6.0 ? fmin(fabs(e.lo), fabs(e.hi)) : 0.0;
+                cr_assert(!contains_with(e, ph, m), "n %g phase %d side %d", ns[i], p, side);
+                add(b, e, e, e);
+                add(b, o, o, o);
+            }
 }
 
 /* The lattice's cells of the placed box (each axis its own cells, the other two a cell's
@@ -68,6 +114,7 @@ static void make_boxes(int which, boxes *b)
     add(b, (ism_interval){0, 2 * M_PI}, (ism_interval){-1, 1}, (ism_interval){1, 9});
     add(b, (ism_interval){-INFINITY, INFINITY}, (ism_interval){2e9, 2e9 + 1},
         (ism_interval){-3, 3.5});
+    far_boxes(b);
 }
 
 static void same_interval(const char *what, size_t i, ism_interval got, ism_interval want)
