@@ -168,8 +168,17 @@ Test(interval_trig_lanes, batch_is_single_box_and_libm)
     free(b);
 }
 
-/* v_sin_at / v_cos_at and v_trig_resolves over four boxes' x, given libm's sines and
- * cosines of their bounds; compiled twice (avx2_clone.h). */
+/* The phases where sin (cosine 0) or cos (1) is 1 (minus 0) and -1 (minus 1), as written in
+ * iv_sin_at / iv_cos_at */
+static double phase_of(int cosine, int minus)
+{
+    return cosine ? (minus ? M_PI : 0.0) : (minus ? -M_PI / 2 : M_PI / 2);
+}
+
+/* v_sin_at / v_cos_at, v_trig_resolves and v_may_contain at the two phases (ok[4 + j],
+ * ok[8 + j]) over four boxes' x, given libm's sines and cosines of their bounds; compiled
+ * twice (avx2_clone.h). The masks alone too: at |x| near 10 a tolerance decides whether the
+ * box holds a point within 1e-11 of the peak, where sin rounds to 1 either way. */
 ISM_AVX2_TWICE(void, trig_lanes,
                (const double *lo, const double *hi, const double *w1, const double *w2,
                 int cosine, double *olo, double *ohi, long long *ok),
@@ -177,10 +186,12 @@ ISM_AVX2_TWICE(void, trig_lanes,
     vi a = {v4_ld(lo), v4_ld(hi)};
     vi r = cosine ? v_cos_at(a, v4_ld(w1), v4_ld(w2)) : v_sin_at(a, v4_ld(w1), v4_ld(w2));
     v4i m = v_trig_resolves(a);
+    v4i up = v_may_contain(a, phase_of(cosine, 0), 2.0 * M_PI);
+    v4i down = v_may_contain(a, phase_of(cosine, 1), 2.0 * M_PI);
     v4_st(olo, r.lo);
     v4_st(ohi, r.hi);
     for (int j = 0; j < 4; j++)
-        ok[j] = m[j];)
+        ok[j] = m[j], ok[4 + j] = up[j], ok[8 + j] = down[j];)
 
 static void check_lanes(void (*run)(const double *, const double *, const double *,
                                     const double *, int, double *, double *, long long *),
@@ -189,7 +200,7 @@ static void check_lanes(void (*run)(const double *, const double *, const double
     for (size_t i = 0; i + 4 <= b->n; i++) /* every window of four: each box in each lane */
         for (int cosine = 0; cosine < 2; cosine++) {
             double lo[4], hi[4], w1[4], w2[4], olo[4], ohi[4];
-            long long ok[4];
+            long long ok[12];
             for (int j = 0; j < 4; j++) {
                 ism_interval a = b->v[0][i + j];
                 lo[j] = a.lo, hi[j] = a.hi;
@@ -202,6 +213,11 @@ static void check_lanes(void (*run)(const double *, const double *, const double
                 cr_assert_eq(ok[j] != 0, iv_trig_resolves(a), "box %zu", i + j);
                 if (!ok[j])
                     continue;
+                for (int minus = 0; minus < 2; minus++)
+                    cr_assert_eq(ok[4 + 4 * minus + j] != 0,
+                                 may_contain(a.lo, a.hi, phase_of(cosine, minus), 2.0 * M_PI),
+                                 "box %zu [%a, %a] cosine %d minus %d", i + j, a.lo, a.hi, cosine,
+                                 minus);
                 ism_interval want = cosine ? iv_cos(a) : iv_sin(a);
                 same_interval(cosine ? "v_cos_at" : "v_sin_at", i + j,
                               (ism_interval){olo[j], ohi[j]}, want);
