@@ -188,7 +188,8 @@ static bool grouped_ends(const ism_flines *l, size_t ne, int *order, const ism_f
 
 /* Is far_agreement of two ends whose far gradients are g1, g2 a number (so pair_point
  * pairs them), known without working it out? Squared norms within 2^±900 keep the norms,
- * their product and the dot product finite and the product nonzero. False: ask it. */
+ * their product and the dot product finite and the product nonzero. Sufficient, not tight:
+ * a false only costs a far_agreement. */
 static bool agreement_a_number(const double g1[3], const double g2[3])
 {
     double s1 = ism_dot3(g1, g1), s2 = ism_dot3(g2, g2);

@@ -28,7 +28,9 @@ typedef struct unit_g {
  * stack; a larger one (a coarse node's face crossed by finer neighbours' tiles) allocates
  * it. 32: a loop has no more points than its node has lines, and stitch.c keeps a node of
  * up to FEW_ENDS = 32 ends (16 lines) on its stack too; no polygon of the issue's rows
- * passes it (callgrind line counts of the allocating branches). */
+ * passes it (callgrind line counts of the allocating branches). On the heap the distance
+ * table is n² doubles by design: the corner fans' search reads every pair, already n² in
+ * time. */
 #define UNIT_STACK 32
 
 static void unit_gradient(const ism_fpoint *p, unit_g *ug)
@@ -506,6 +508,7 @@ static bool fan_from_best_corner(ism_cell_out *out, size_t base, polygon *pg)
  * are 2n − 5 for n corners, so a polygon of up to 10 corners in one batch of
  * ISM_GRAD_UNROLLED lanes (eval.h: one pass of the tape). */
 #define FAN_POINTS ISM_GRAD_UNROLLED
+_Static_assert(FAN_POINTS >= 2, "a triangle's centroid and diagonal in one batch, or no progress");
 
 /* ism_sample_dist_between at p between the corners v[0..n), f and g = ∇f at p given. */
 static double fan_point_dist(ism_sampler *s, const double p[3], double f, const double g[3],
@@ -519,7 +522,8 @@ static double fan_point_dist(ism_sampler *s, const double p[3], double f, const 
  * stopping once it passes bound. f and ∇f at the points are evaluated FAN_POINTS at a time
  * (ism_sample_grad_batch: bit for bit ism_sample_grad's values one at a time), the rest of
  * ism_sample_dist_between point by point in the fan's order; a fan that passes the bound
- * early leaves the rest of its batch unread. Not inlined: its batch's room on the stack of
+ * early leaves the rest of its batch unread (counted in s->n_gradient though unread: the
+ * --stats gradient count, not the mesh). Not inlined: its batch's room on the stack of
  * every polygon's call cost Barth 0.0259, which seldom fans from a corner, 16 instructions a
  * polygon. */
 static __attribute__((noinline)) double corner_fan_error(ism_sampler *s, const ism_fpoint *q,
