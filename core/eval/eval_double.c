@@ -156,10 +156,10 @@ bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y,
 static unsigned natural_branch(const ism_instr *in, double a, const double *r)
 {
     switch (in->op) {
-    case ISM_OP_MIN_RR: return a < r[in->b] ? 1 : 2;
-    case ISM_OP_MAX_RR: return a > r[in->b] ? 1 : 2;
-    case ISM_OP_MIN_RC: return a < in->imm ? 1 : 2;
-    case ISM_OP_MAX_RC: return a > in->imm ? 1 : 2;
+    case ISM_OP_MIN_RR: return 1 + ism_minmax_gradient_operand(true, a, r[in->b]);
+    case ISM_OP_MAX_RR: return 1 + ism_minmax_gradient_operand(false, a, r[in->b]);
+    case ISM_OP_MIN_RC: return 1 + ism_minmax_gradient_operand(true, a, in->imm);
+    case ISM_OP_MAX_RC: return 1 + ism_minmax_gradient_operand(false, a, in->imm);
     default: return a < 0.0 ? 2 : 1; /* ISM_OP_ABS */
     }
 }
@@ -218,6 +218,14 @@ int ism_top_active_branch(const ism_tape *t, const double val[2])
     if (!top)
         return -1;
     return top->op == ISM_OP_MIN_RR ? val[1] < val[0] : val[1] > val[0];
+}
+
+int ism_top_gradient_branch(const ism_tape *t, const double val[2])
+{
+    const ism_instr *top = ism_tape_top_minmax(t);
+    if (!top)
+        return -1;
+    return ism_minmax_gradient_operand(top->op == ISM_OP_MIN_RR, val[0], val[1]);
 }
 
 /* Lane kernels: one group of LANES lanes each, restrict parameters so that gcc knows the

@@ -34,9 +34,9 @@ static ism_dual dual_binary(int op, ism_dual a, ism_dual b)
             r.d[k] = (a.d[k] - r.v * b.d[k]) / b.v;
         return r;
     case ISM_OP_MIN_RR:
-        return a.v < b.v ? a : b;
+        return ism_minmax_gradient_operand(true, a.v, b.v) ? b : a;
     default: /* ISM_OP_MAX_RR */
-        return a.v > b.v ? a : b;
+        return ism_minmax_gradient_operand(false, a.v, b.v) ? b : a;
     }
 }
 
@@ -161,14 +161,14 @@ STEP(step_max_rr)
 {
     (void)trig;
     const ism_dual *b = &r[in->b];
-    *o = a->v > b->v ? *a : *b;
+    *o = ism_minmax_gradient_operand(false, a->v, b->v) ? *b : *a;
 }
 
 STEP(step_min_rr)
 {
     (void)trig;
     const ism_dual *b = &r[in->b];
-    *o = a->v < b->v ? *a : *b;
+    *o = ism_minmax_gradient_operand(true, a->v, b->v) ? *b : *a;
 }
 
 /* the one-operand steps of CSG and distance tapes, ism_unary_chain's g and g' written out

@@ -57,8 +57,8 @@ static inline void jet_binary(ism_jet *o, int op, const ism_jet *a, const ism_je
         return;
     case ISM_OP_MUL_RR: jet_mul(o, a, b); return;
     case ISM_OP_DIV_RR: jet_div(o, a, b); return;
-    case ISM_OP_MIN_RR: *o = a->v < b->v ? *a : *b; return;
-    default: *o = a->v > b->v ? *a : *b; return; /* ISM_OP_MAX_RR */
+    case ISM_OP_MIN_RR: *o = ism_minmax_gradient_operand(true, a->v, b->v) ? *b : *a; return;
+    default: *o = ism_minmax_gradient_operand(false, a->v, b->v) ? *b : *a; return; /* MAX_RR */
     }
 }
 

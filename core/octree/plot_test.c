@@ -139,22 +139,12 @@ static bool no_roots(ism_sampler *s, const ism_flatness *fl, const ism_corners *
 
 static double min_side(const double lo[3], const double hi[3]);
 
-/* Is branch b of f's top min/max the one f's own derivative follows at a point where the
- * branches' values are v? The gradient passes on the operand that wins strictly (eval_
- * gradient.c: max takes a where a > b, else b; min where a < b), and the label (ism_top_
- * active_branch) takes a on a tie: they name the same branch unless the values tie or one
- * is NaN. */
-static bool gradient_follows(const ism_tape *t, const double v[2], int b)
-{
-    bool is_min = ism_tape_top_minmax(t)->op == ISM_OP_MIN_RR;
-    return b == 1 || (is_min ? v[0] < v[1] : v[0] > v[1]);
-}
-
 /* The branch of f's top min/max at corner c (ism_crease_branch's label), through the
  * thread's memo when there is one (only asked while the node's tape keeps that min/max:
  * crease_cell). Its values are evaluated here, not through ism_crease_branch, to learn
- * whether f's own gradient at the corner, k->g[c], is that branch's gradient: where the
- * branch wins strictly (gradient_follows) the memo keeps k->g[c] as corner_gradient's
+ * whether f's own gradient at the corner, k->g[c], is that branch's gradient: where f's
+ * gradient follows the label (ism_top_gradient_branch: the branch wins strictly, or it is
+ * the second operand) the memo keeps k->g[c] as corner_gradient's
  * answer, bit for bit the one ism_crease_branch would evaluate (a tape keeping the min/max
  * gives f's branches' values and gradients bit for bit, octree.h; min/max pass the chosen
  * operand's partials on whole). Barth's sextic at E 0.0259: 14,137 branch gradients
@@ -174,7 +164,7 @@ static int corner_branch(ism_sampler *s, const ism_corners *k, int c)
         return -1;
     int b = ism_top_active_branch(s->tape, v);
     if (m && b >= 0) {
-        bool own = gradient_follows(s->tape, v, b);
+        bool own = ism_top_gradient_branch(s->tape, v) == b;
         *m = (ism_label_entry){k->key[c], b, own, {0, 0, 0}};
         if (own)
             memcpy(m->g, k->g[c], sizeof m->g);

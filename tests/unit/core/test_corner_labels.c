@@ -188,7 +188,7 @@ static void sweep(const pf_surface *surf, int placement)
 }
 
 /* Barth's sextic through a top min: min(-B, 2.25 - r²) = -max(B, r² - 2.25), the same zero
- * set, so that gradient_follows' min arm (a wins where a < b) is swept too. */
+ * set, so that ism_top_gradient_branch's min arm (a wins where a < b) is swept too. */
 static const ism_param barth_min_phi[] = {{"phi", 1.6180339887498949}};
 static const pf_surface barth_min = {
     "min(-(4*(phi^2*x^2 - y^2)*(phi^2*y^2 - z^2)*(phi^2*z^2 - x^2) - "
