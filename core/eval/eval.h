@@ -115,23 +115,6 @@ bool ism_eval_top_values(const ism_tape *t, ism_eval_ws *ws, double x, double y,
  * a tie); -1 when t does not end so. */
 int ism_top_active_branch(const ism_tape *t, const double val[2]);
 
-/* The operand of min(a, b) (is_min) or max(a, b) whose value and partials f's derivative
- * passes on: 0 (a) where a wins strictly (min: a < b, max: a > b), else 1 (b) — b on a tie,
- * and wherever a or b is NaN. The one rule of the gradient evaluators (eval_gradient.c's
- * steps; eval_hessian.c; eval_gradient_batch.c's k_pick is its four-lane form) and of
- * ism_eval_piece's natural branch (1 + this); ism_top_active_branch's label differs from it
- * only there (a tie or a NaN gives the label 0). */
-static inline int ism_minmax_gradient_operand(bool is_min, double a, double b)
-{
-    return is_min ? !(a < b) : !(a > b);
-}
-
-/* When t ends in min/max of two registers: 0 or 1, the branch (ism_top_active_branch's
- * numbering) whose gradient f's own gradient is where the two values are val
- * (ism_minmax_gradient_operand); -1 when t does not end so. It names the labelled branch
- * (ism_top_active_branch) exactly where that branch wins strictly or is the second one. */
-int ism_top_gradient_branch(const ism_tape *t, const double val[2]);
-
 /* A smooth piece of f: which branch each min, max and abs on f's active path takes. For the
  * k-th such instruction of the tape (k < ISM_PIECE_KINKS, in tape order) bits 2k and 2k + 1
  * hold 1 (min/max: its first operand; abs(a): +a), 2 (the second operand or the constant;

@@ -7,6 +7,7 @@
  * sines and cosines through the workspace's memo, as one point does. */
 #include "core/eval/avx2_clone.h"
 #include "core/eval/threaded.h"
+#include "core/eval/top_branch.h"
 #include "core/eval/workspace.h"
 #include "core/eval/trig_pair.h"
 #include "core/expr/scalar_ops.h"
@@ -218,14 +219,6 @@ int ism_top_active_branch(const ism_tape *t, const double val[2])
     if (!top)
         return -1;
     return top->op == ISM_OP_MIN_RR ? val[1] < val[0] : val[1] > val[0];
-}
-
-int ism_top_gradient_branch(const ism_tape *t, const double val[2])
-{
-    const ism_instr *top = ism_tape_top_minmax(t);
-    if (!top)
-        return -1;
-    return ism_minmax_gradient_operand(top->op == ISM_OP_MIN_RR, val[0], val[1]);
 }
 
 /* Lane kernels: one group of LANES lanes each, restrict parameters so that gcc knows the

@@ -5,6 +5,7 @@
 #include "core/eval/deriv_rules.h"
 #include "core/eval/lanes4.h"
 #include "core/eval/threaded.h"
+#include "core/eval/top_branch.h"
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
 #include <string.h>

@@ -66,7 +66,7 @@ INLINE void k_div_d(double *o, const double *ad, const double *q, const double *
     v4_st(o, (v4_ld(ad) - v4_ld(q) * v4_ld(bd)) / v4_ld(bv));
 }
 
-/* min: a's component where a.v < b.v, else b's; max: where a.v > b.v (eval.h's
+/* min: a's component where a.v < b.v, else b's; max: where a.v > b.v (top_branch.h's
  * ism_minmax_gradient_operand, four lanes at once: a compare's mask is false on NaN) */
 INLINE void k_pick(double *o, const double *av, const double *bv, const double *ak,
                    const double *bk, bool is_min)

@@ -10,6 +10,7 @@
  * where such a partial met an infinite value (0 · inf: NaN before, 0 now). The singular
  * search's Newton steps spend most of their time here. */
 #include "core/eval/deriv_rules.h"
+#include "core/eval/top_branch.h"
 #include "core/eval/workspace.h"
 
 /* The loops over the 3 first and 6 second partials are unrolled by pragma: gcc -O2 keeps

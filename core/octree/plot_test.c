@@ -7,6 +7,7 @@
 #include "core/octree/plot_test.h"
 #include "core/eval/eval.h"
 #include "core/eval/interval_ops.h"
+#include "core/eval/top_branch.h"
 #include "core/expr/expr.h"
 #include "core/expr/tape.h"
 #include "core/octree/cell_cache.h"

@@ -1,4 +1,4 @@
-/* test_gradient_branch.c — eval.h's one min/max gradient rule (ism_minmax_gradient_operand,
+/* test_gradient_branch.c — top_branch.h's min/max gradient rule (ism_minmax_gradient_operand,
  * ism_top_gradient_branch): the operand a min or max passes its derivative on from is a where
  * a wins strictly, else b (a tie, a NaN), while the label (ism_top_active_branch) takes a on a
  * tie or a NaN. Checked three ways: the rule's values written out by hand (ties, NaN on either
@@ -13,6 +13,7 @@
 #include <string.h>
 #include "poly_fixture.h"
 #include "core/eval/eval.h"
+#include "core/eval/top_branch.h"
 #include "core/eval/workspace.h"
 #include "tests/unit/placements.h"
 
