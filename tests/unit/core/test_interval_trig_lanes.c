@@ -9,12 +9,15 @@
  * both compiled copies (avx2_clone.h) against iv_sin_at / iv_cos_at, so the baseline copy is
  * checked on an AVX2 machine too. The single-box pass keeps whole intervals' sines and cosines
  * (trig_pair.h's interval entries): the lattice's cells repeat an axis's interval every
- * CELLS boxes, and boxes at k pi/2 share a bound, so its hits and misses are both checked. */
+ * CELLS boxes, and boxes at k pi/2 share a bound, so its hits and misses are both checked.
+ * And the interval jet's sine and cosine (eval_interval_jet.c's iv_sin_cos, one sincos per
+ * bound) against iv_sin / iv_cos: its value and its x partial. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
 
 #include "core/eval/avx2_clone.h"
+#include "core/eval/interval_jet.h"
 #include "core/eval/interval_lanes.h"
 #include "core/expr/tape.h"
 #include "poly_fixture.h"
@@ -235,6 +238,37 @@ Test(interval_trig_lanes, lanes_are_iv_sin_at_in_both_copies)
 #if ISM_HAVE_AVX2_CLONE
         check_lanes(trig_lanes_base, b);
 #endif
+    }
+    free(b);
+}
+
+/* ism_eval_interval_jet of sin(x) and cos(x) over the boxes: the value iv_sin / iv_cos of the
+ * box's x bit for bit and the x partial cos / -sin times x's partial [1, 1] (iv_mul, as the
+ * chain rule takes it). */
+Test(interval_trig_lanes, jet_is_iv_sin_and_iv_cos)
+{
+    static const char *exprs[] = {"sin(x)", "cos(x)"};
+    boxes *b = malloc(sizeof *b);
+    cr_assert(b);
+    for (int e = 0; e < 2; e++) {
+        ism_error err;
+        ism_tape *t = ism_tape_compile(exprs[e], NULL, 0, NULL, 0, NULL, &err);
+        cr_assert(t, "%s", exprs[e]);
+        ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+        cr_assert(jw);
+        for (int which = -1; which <= 1; which++) {
+            make_boxes(which, b);
+            for (size_t i = 0; i < b->n; i++) {
+                ism_interval box[3] = {b->v[0][i], b->v[1][i], b->v[2][i]}, x = box[0];
+                ism_ivjet out;
+                ism_eval_interval_jet(t, jw, box, NULL, NULL, &out);
+                ism_interval v = e ? iv_cos(x) : iv_sin(x), d = e ? iv_neg(iv_sin(x)) : iv_cos(x);
+                same_interval(e ? "jet cos" : "jet sin", i, out.v, v);
+                same_interval(e ? "jet cos'" : "jet sin'", i, out.d[0], iv_mul(d, iv(1.0, 1.0)));
+            }
+        }
+        ism_ivjet_ws_free(jw);
+        ism_tape_free(t);
     }
     free(b);
 }
