@@ -500,8 +500,11 @@ INLINE void branch_h(vh *o, const ism_instr *in, const vj *r, const vh *hr, unsi
     }
 }
 
-/* The Hessian of one instruction whose value and first partials step has just written. */
-INLINE void hstep(const ism_instr *in, const vj *r, vh *hr, unsigned w, v4i free, v4i took_a)
+/* The Hessian of one instruction whose value and first partials step has just written; u is
+ * SQUARE's and POWI's operand value as it stood before that write (op_unary reads it first,
+ * so the two agree when the output register is the operand's). */
+INLINE void hstep(const ism_instr *in, const vj *r, vh *hr, unsigned w, v4i free, v4i took_a,
+                  vi u)
 {
     vh *o = &hr[in->out];
     const vj *a = &r[in->a];
@@ -540,7 +543,7 @@ INLINE void hstep(const ism_instr *in, const vj *r, vh *hr, unsigned w, v4i free
         break;
     }
     case ISM_OP_SQUARE: case ISM_OP_POWI: { /* chain_hess: g'(U), g''(U) as op_unary */
-        vi u = a->v, g1, g2;
+        vi g1, g2;
         if (in->op == ISM_OP_SQUARE) {
             g1 = v_mul_c(u, 2.0);
             g2 = (vi){splat(2.0), splat(2.0)};
@@ -579,8 +582,10 @@ INLINE void run_jet_group(const ism_tape *t, vj *r, vh *hr, bool branches)
         unsigned w = in->free_of == 0 ? 7u : deps;
         unsigned w2 = in->free_of == 0 ? all : ism_ivjet_want(deps, 1, in->smooth);
         v4i took_a = {0, 0, 0, 0};
+        bool unary = in->op == ISM_OP_SQUARE || in->op == ISM_OP_POWI;
+        vi u = unary ? r[in->a].v : ivz(); /* before step's write: out may be a */
         v4i free = step(in, r, w, branches, &took_a);
-        hstep(in, r, hr, w2, free, took_a);
+        hstep(in, r, hr, w2, free, took_a, u);
     }
 }
 
@@ -596,7 +601,7 @@ INLINE void run_hess_group(const ism_tape *t, const vj *rec, vj *r, vh *hr)
         unsigned deps = ISM_FREE_ALL & ~(unsigned)in->free_of;
         unsigned w2 = in->free_of == 0 ? all : ism_ivjet_want(deps, 1, in->smooth);
         r[in->out] = rec[i * ISM_IVG_GROUPS];
-        hstep(in, r, hr, w2, none, none);
+        hstep(in, r, hr, w2, none, none, r[in->a].v); /* after the copy, as hess_op reads */
     }
 }
 
