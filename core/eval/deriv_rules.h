@@ -7,6 +7,7 @@
 
 #include <math.h>
 #include "core/eval/sincos.h"
+#include "core/eval/top_branch.h"
 #include "core/expr/scalar_ops.h"
 #include "core/expr/tape.h"
 
@@ -70,8 +71,14 @@ static inline ism_chain ism_unary_chain(const ism_instr *in, double u)
         r.g1 = -r.g / u;
         r.g2 = -2.0 * r.g1 / u;
         break;
-    case ISM_OP_MIN_RC: r.g = ism_min(u, c); r.g1 = u < c ? 1.0 : 0.0; break;
-    case ISM_OP_MAX_RC: r.g = ism_max(u, c); r.g1 = u > c ? 1.0 : 0.0; break;
+    case ISM_OP_MIN_RC: /* the constant is operand b: top_branch.h's rule */
+        r.g = ism_min(u, c);
+        r.g1 = ism_minmax_gradient_operand(true, u, c) ? 0.0 : 1.0;
+        break;
+    case ISM_OP_MAX_RC:
+        r.g = ism_max(u, c);
+        r.g1 = ism_minmax_gradient_operand(false, u, c) ? 0.0 : 1.0;
+        break;
     case ISM_OP_NEG: r.g = -u; r.g1 = -1.0; break;
     case ISM_OP_SQUARE: r.g = u * u; r.g1 = 2.0 * u; r.g2 = 2.0; break;
     case ISM_OP_POWI: {

@@ -201,13 +201,15 @@ STEP(step_div_rc)
 STEP(step_min_rc)
 {
     (void)r, (void)trig;
-    dual_chain(o, ism_min(a->v, in->imm), a->v < in->imm ? 1.0 : 0.0, a);
+    double d = ism_minmax_gradient_operand(true, a->v, in->imm) ? 0.0 : 1.0; /* imm is b */
+    dual_chain(o, ism_min(a->v, in->imm), d, a);
 }
 
 STEP(step_max_rc)
 {
     (void)r, (void)trig;
-    dual_chain(o, ism_max(a->v, in->imm), a->v > in->imm ? 1.0 : 0.0, a);
+    double d = ism_minmax_gradient_operand(false, a->v, in->imm) ? 0.0 : 1.0;
+    dual_chain(o, ism_max(a->v, in->imm), d, a);
 }
 
 STEP(step_abs)

@@ -10,6 +10,7 @@
  * diagonal x = y at the own, PF_OFF and PF_IRR placements (the tie exact at each). */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 #include "poly_fixture.h"
 #include "core/eval/eval.h"
@@ -134,4 +135,45 @@ Test(gradient_branch, evaluators_follow_the_rule)
         ism_eval_ws_free(ws);
         ism_tape_free(t);
     }
+}
+
+/* The register–constant forms min(x, c) and max(x, c) (MIN_RC / MAX_RC: the constant is
+ * operand b) follow the same rule: ∂/∂x is 1 only where x wins strictly, 0 on the tie x = c
+ * and at a NaN x — written out by hand here, not read from the rule. ism_eval_gradient,
+ * ism_eval_hessian's gradient and a batch's tail lane (lane 4 of 5) must give it, and
+ * ism_eval_piece's kink 1 + the operand. c sits at 0.5 moved by the three placements' shifts,
+ * and x one ulp either side of it. */
+Test(gradient_branch, constant_operand_follows_the_rule)
+{
+    const double shift[3] = {0, PF_OFF_X, PF_IRR_X};
+    for (int e = 0; e < 2; e++)
+        for (int w = 0; w < 3; w++) {
+            double c = 0.5 + shift[w];
+            char text[64];
+            snprintf(text, sizeof text, e ? "max(x, %.17g)" : "min(x, %.17g)", c);
+            pf_surface s = {text, NULL, 0, NULL, 0};
+            ism_tape *t = pf_compile(&s);
+            ism_eval_ws *ws = ism_eval_ws_new(t);
+            cr_assert(ws && t->len > 0);
+            cr_assert_eq(t->code[t->len - 1].op, e ? ISM_OP_MAX_RC : ISM_OP_MIN_RC, "%s", text);
+            /* x, and ∂/∂x by hand: {tie, one ulp up, one ulp down, NaN} */
+            const double xs[4] = {c, nextafter(c, 2), nextafter(c, 0), NAN};
+            const double want[2][4] = {{0, 0, 1, 0}, {0, 1, 0, 0}}; /* min, max */
+            for (int i = 0; i < 4; i++) {
+                double x = xs[i], d = want[e][i], g[3], hg[3], hh[6];
+                ism_eval_gradient(t, ws, x, 0.25, 0.25, g);
+                cr_expect(g[0] == d && g[1] == 0 && g[2] == 0, "%s at %.17g: gradient %g",
+                          text, x, g[0]);
+                ism_eval_hessian(t, ws, x, 0.25, 0.25, hg, hh);
+                cr_expect(hg[0] == d, "%s at %.17g: ism_eval_hessian's %g", text, x, hg[0]);
+                double bx[5] = {0, 1, -1, 2, x}, by[5] = {0}, bz[5] = {0}, bf[5], bgr[5][3];
+                ism_eval_gradient_batch(t, ws, bx, by, bz, bf, bgr, 5);
+                cr_expect(bgr[4][0] == d, "%s at %.17g: batch lane 4's %g", text, x, bgr[4][0]);
+                ism_piece pc = ism_eval_piece(t, ws, x, 0.25, 0.25);
+                cr_expect_eq(ism_piece_branch(pc, 0), d == 1 ? 1u : 2u, "%s at %.17g: piece",
+                             text, x);
+            }
+            ism_eval_ws_free(ws);
+            ism_tape_free(t);
+        }
 }
