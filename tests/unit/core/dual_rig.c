@@ -37,6 +37,7 @@ void dual_rig_tear_down(dual_rig *r)
     ism_eval_ws_free(r->w.s.ws);
     ism_ivjet_ws_free(r->w.jet);
     free(r->w.pairs);
+    free(r->w.pairs_filled);
 }
 
 void dual_rig_node(dual_rig *r, const int32_t q[3], int level, dnode *n, corner_view *v)
