@@ -50,15 +50,28 @@ bool ism_dual_taylor_many(const ism_tape *t, ism_ivjet_ws *jet, const double (*l
     ism_ivgrad at[ISM_IVGRAD_BATCH];
     if (n > ISM_IVGRAD_BATCH)
         return false;
+    ism_interval box[ISM_IVGRAD_BATCH][3];
+    ism_ivjet bj[ISM_IVGRAD_BATCH];
     for (size_t k = 0; k < n; k++) {
-        ism_interval box[3];
         for (int a = 0; a < 3; a++) {
             m[k].c[a] = centre_along(lo[k], hi[k], a);
-            box[a] = iv(lo[k][a], hi[k][a]);
+            box[k][a] = iv(lo[k][a], hi[k][a]);
             mid[k][a] = iv(m[k].c[a], m[k].c[a]);
         }
-        ok[k] = ism_eval_interval_jet(t, jet, box, NULL, NULL, &m[k].box) == 0;
     }
+    /* the jets in lanes (bit for bit the one-box jets; hess_only's lanes from the records
+       of one group of the natural batch when every box has one there, else the whole
+       second-order pass): torus at 1e-2, 16.23M -> 15.64M instructions (callgrind). ok
+       true: the centre batch below takes no tape with a min, max or abs (else false, and
+       nothing here is read), so neither the jets nor the centres have kinks */
+    if (ism_eval_interval_jet_lanes(t, jet, (const ism_interval (*)[3])box, n, bj)) {
+        for (size_t k = 0; k < n; k++) {
+            m[k].box = bj[k];
+            ok[k] = true;
+        }
+    } else
+        for (size_t k = 0; k < n; k++)
+            ok[k] = ism_eval_interval_jet(t, jet, box[k], NULL, NULL, &m[k].box) == 0;
     /* after every jet: this batch's records replace those the jets took their values from */
     if (!ism_eval_interval_grad_batch(t, jet, (const ism_interval (*)[3])mid, n, at))
         return false;

@@ -35,11 +35,12 @@ bool ism_dual_taylor(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                      const double hi[3], ism_dual_model *m, uint64_t *intervals);
 
 /* ism_dual_taylor over lo[k]..hi[k] for k < n (n <= ISM_IVGRAD_BATCH) into m[k], bit for
- * bit, ok[k] its answer: the jets over the boxes one by one (each taking the record a batch of
- * natural enclosures left for its box, interval_jet.h), then the gradients at the centres in
- * one batch (ism_eval_interval_grad_batch; its cost against one by one: interval_jet.h,
- * ISM_IVGRAD_BATCH). Counts no evaluation (the caller counts each model
- * when it uses it, as ism_dual_taylor would). False, with nothing in m or ok to use, when the
+ * bit, ok[k] its answer: the jets over the boxes in lanes (ism_eval_interval_jet_lanes: from
+ * the records a batch of natural enclosures left for the boxes when they are in one of its
+ * groups, interval_jet.h), then the gradients at the centres in one batch
+ * (ism_eval_interval_grad_batch; its cost against one by one: interval_jet.h,
+ * ISM_IVGRAD_BATCH). Counts no evaluation (the caller counts each model when it uses it, as
+ * ism_dual_taylor would). False, with nothing in m or ok to use, when the
  * batch does not take t: then take the models one by one. */
 bool ism_dual_taylor_many(const ism_tape *t, ism_ivjet_ws *jet, const double (*lo)[3],
                           const double (*hi)[3], size_t n, ism_dual_model *m, bool *ok);

@@ -709,6 +709,64 @@ Test(dual_cert, models_made_at_once_are_the_models_made_one_by_one)
     ism_tape_free(t);
 }
 
+/* ism_dual_taylor_many on some of the boxes of a batch of natural enclosures just taken, as
+ * ism_dual_pre_models calls it (the children whose tails tighten, a subset of kid_kinds's
+ * batch, in its order): every subset of a batch of 1 to 8 tube cells, up to 96 of them a
+ * batch size, each box's model ism_dual_taylor's to the bit. The jets then come from the
+ * records of one of the batch's groups (a subset inside one group of 4: its lanes, not the
+ * first ones) or from the whole second-order pass (a subset across both), so a jet read from
+ * another lane of its group, or records of the other group, shows as a differing bound.
+ * Three placements (tube_cell: on the lattice, moved by 1e-3 and by √2 − 1 of a cell). */
+Test(dual_cert, models_of_some_of_a_batchs_boxes_are_the_models_made_one_by_one)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    cr_assert(jw);
+    size_t models = 0, in_one_group = 0, across = 0;
+    for (size_t nb = 1, first = 0; nb <= ISM_IVGRAD_BATCH; nb++) {
+        unsigned subsets = 1u << nb, step = subsets > 96 ? subsets / 96 : 1;
+        for (unsigned pick = 1; pick < subsets; pick += step, first += 7) {
+            double lo[ISM_IVGRAD_BATCH][3], hi[ISM_IVGRAD_BATCH][3];
+            double slo[ISM_IVGRAD_BATCH][3], shi[ISM_IVGRAD_BATCH][3];
+            ism_interval box[ISM_IVGRAD_BATCH][3];
+            size_t np = 0;
+            unsigned groups = 0;
+            for (size_t k = 0; k < nb; k++) {
+                tube_cell((int)((first + k) % TUBE_CELLS), lo[k], hi[k]);
+                for (int a = 0; a < 3; a++)
+                    box[k][a] = iv(lo[k][a], hi[k][a]);
+                if (!(pick >> k & 1))
+                    continue;
+                memcpy(slo[np], lo[k], sizeof slo[np]);
+                memcpy(shi[np++], hi[k], sizeof shi[np - 1]);
+                groups |= 1u << (k / 4);
+            }
+            ism_ivgrad g[ISM_IVGRAD_BATCH];
+            cr_assert(ism_eval_interval_grad_batch(t, jw, (const ism_interval (*)[3])box, nb, g));
+            ism_dual_model m[ISM_IVGRAD_BATCH], want;
+            bool ok[ISM_IVGRAD_BATCH];
+            cr_assert(ism_dual_taylor_many(t, jw, (const double (*)[3])slo,
+                                           (const double (*)[3])shi, np, m, ok));
+            for (size_t k = 0; k < np; k++) {
+                uint64_t count = 0;
+                bool one = ism_dual_taylor(t, jw, slo[k], shi[k], &want, &count);
+                cr_assert_eq(ok[k], one, "batch %zu, pick %#x, box %zu", nb, pick, k);
+                cr_assert(memcmp(&m[k], &want, sizeof want) == 0, "batch %zu, pick %#x, box %zu",
+                          nb, pick, k);
+                models++;
+            }
+            in_one_group += groups != 3;
+            across += groups == 3;
+        }
+    }
+    /* both ways the jets go were taken, many times */
+    cr_assert(in_one_group > 50 && across > 200, "%zu in one group, %zu across", in_one_group,
+              across);
+    cr_assert(models > 1000, "%zu", models);
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
+
 /* f at FORM_SAMPLES^3 points of lo..hi, corners included, all of v's sign (v one-signed):
  * v encloses f over the box, the fact empty_proven's early return rests on. */
 #define FORM_SAMPLES 5
