@@ -27,12 +27,17 @@
  * to a power of two), fit in 32 bits below this. */
 #define MAX_PIECE_VERTICES ((size_t)1 << 30)
 
+/* The larger of a and b by comparison (b when either is NaN), not libm's fmax: a call per
+ * vertex's component. */
+static double larger(double a, double b) { return a > b ? a : b; }
+
 /* g scaled to unit length, or 0 0 0 when g is zero or not finite. Dividing by the largest
  * component first keeps the squared length from underflowing (∇f ~ 1e-160 where f = g^64
- * nears its zero gave normals of length 1.015) or overflowing. */
+ * nears its zero gave normals of length 1.015) or overflowing. A NaN component gives 0 0 0
+ * whatever big then is (NaN: no scaling; a number: a NaN length), as with fmax. */
 static void unit_normal(const double g[3], float n[3])
 {
-    double big = fmax(fabs(g[0]), fmax(fabs(g[1]), fabs(g[2]))), s[3] = {0, 0, 0}, len = 0;
+    double big = larger(fabs(g[0]), larger(fabs(g[1]), fabs(g[2]))), s[3] = {0, 0, 0}, len = 0;
     if (big > 0 && isfinite(big)) {
         for (int k = 0; k < 3; k++)
             s[k] = g[k] / big;
@@ -49,7 +54,7 @@ static uint64_t hash_point(const double p[3])
 {
     uint64_t b[3];
     for (int k = 0; k < 3; k++) {
-        double v = p[k] == 0 ? 0.0 : p[k]; /* -0.0 and 0.0 are one point */
+        double v = p[k] + 0.0; /* -0.0 and 0.0 are one point: −0 + 0 = +0, else v = p[k] */
         memcpy(&b[k], &v, sizeof b[k]);
     }
     uint64_t h = b[0] * 0x9e3779b97f4a7c15ull ^ b[1] * 0xc2b2ae3d27d4eb4full ^
