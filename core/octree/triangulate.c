@@ -368,12 +368,17 @@ static size_t best_corner(polygon *pg, bool *in_face, bool *folds)
     polygon_lengths(pg);
     for (size_t c = 0; c < n; c++) {
         /* a fan measured no better than the best so far is never chosen, and its faults
-         * only add: the rest of its measure is skipped (the choice is the full measure's) */
-        double worst = -1;
-        for (size_t i = 1; i + 1 < n && worst < best_cos; i++) {
-            double w = i == 1       ? pg->ear[(c + 1) % n]     /* c, c + 1, c + 2 */
-                       : i == n - 2 ? pg->ear[(c + n - 1) % n] /* c, c − 2, c − 1 */
-                                    : tri_cos(pg, c, (c + i) % n, (c + i + 1) % n);
+         * only add: the rest of its measure is skipped (the choice is the full measure's).
+         * Its two ears (c, c + 1, c + 2 and c, c − 2, c − 1, measured already) come first:
+         * the largest of a fan's measures is the same in any order (a NaN is never taken),
+         * and a fan that reaches best_cos at all reaches it in any order, so only the work
+         * skipped changes */
+        double worst = pg->ear[(c + 1) % n], w = pg->ear[(c + n - 1) % n];
+        worst = worst > -1 ? worst : -1; /* from -1, as the loop below takes them */
+        if (w > worst)
+            worst = w;
+        for (size_t i = 2; i + 2 < n && worst < best_cos; i++) {
+            w = tri_cos(pg, c, (c + i) % n, (c + i + 1) % n);
             if (w > worst)
                 worst = w;
         }

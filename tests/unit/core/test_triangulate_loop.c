@@ -6,7 +6,9 @@
  * path (ism_sample_dist_between at the fan's centroids and diagonals' middles, one point at
  * a time): accepted at that bound, refused one ulp below, for loops of 11 to 40 corners
  * whose fans take two or more batches (corner_fan_error: 2n − 5 points, FAN_POINTS at a
- * time). The node in its own box and moved off the lattice (pf_sweep_box). */
+ * time); and the corner the fan starts from, against every corner's fan measured in full here
+ * (its triangles' smallest angles by acos). The node in its own box and moved off the lattice
+ * (pf_sweep_box). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -183,6 +185,119 @@ Test(triangulate_loop, corner_fan_bound_over_batches)
     }
     /* the test reaches the second batch's reads: some fans are worst there */
     cr_assert(later_batch > 0 && later_batch < cases, "%zu of %zu", later_batch, cases);
+    ism_eval_ws_free(s.ws);
+    ism_tape_free(tape);
+}
+
+/* The smallest angle of triangle a, b, c in radians (acos of each corner's cosine: another
+ * way than triangulate.c's largest cosine). */
+static double smallest_angle(const double *a, const double *b, const double *c)
+{
+    const double *v[3] = {a, b, c};
+    double least = M_PI;
+    for (int k = 0; k < 3; k++) {
+        const double *o = v[k], *u = v[(k + 1) % 3], *w = v[(k + 2) % 3];
+        double du[3], dw[3];
+        for (int j = 0; j < 3; j++)
+            du[j] = u[j] - o[j], dw[j] = w[j] - o[j];
+        double cosv = ism_dot3(du, dw) / (ism_norm3(du) * ism_norm3(dw));
+        least = fmin(least, acos(fmax(-1, fmin(1, cosv))));
+    }
+    return least;
+}
+
+/* Does triangle a, b, c of points on the unit sphere face inward (its normal against the
+ * sum of its corners, which are the unit gradients there)? */
+static bool turned_on_sphere(const double *a, const double *b, const double *c)
+{
+    double e1[3], e2[3], nrm[3], m[3];
+    for (int k = 0; k < 3; k++)
+        e1[k] = b[k] - a[k], e2[k] = c[k] - a[k], m[k] = a[k] + b[k] + c[k];
+    ism_cross3(e1, e2, nrm);
+    return ism_dot3(nrm, m) < 0;
+}
+
+/* The corner whose fan's worst triangle (smallest angle) is best, every fan measured in full,
+ * the first of equals: two fans share an ear (q[j - 1], q[j], q[j + 1] ends the fans from
+ * q[j + 1] and q[j - 1]), which measures the same in both, so fans whose worst is that ear
+ * tie (within 1e-12 here, where acos meets the corners in another order). *margin: how much
+ * worse the best fan outside the tie is (near-ties of different triangles are not asked). A
+ * fan with a triangle turned over is worse than any without (triangulate.c's fan_folds). */
+static size_t best_fan_by_hand(const ism_fpoint *q, size_t n, double *margin)
+{
+    double worst[16], best_a = -100, second = -100;
+    for (size_t c = 0; c < n; c++) {
+        worst[c] = M_PI;
+        bool folds = false;
+        for (size_t i = 1; i + 1 < n; i++) {
+            const double *a = q[c].p, *b = q[(c + i) % n].p, *e = q[(c + i + 1) % n].p;
+            worst[c] = fmin(worst[c], smallest_angle(a, b, e));
+            folds = folds || turned_on_sphere(a, b, e);
+        }
+        worst[c] -= folds ? 10 : 0; /* a fan turning a triangle over only when all do */
+        best_a = fmax(best_a, worst[c]);
+    }
+    size_t best = n;
+    for (size_t c = 0; c < n; c++)
+        if (worst[c] >= best_a - 1e-12)
+            best = best < c ? best : c;
+        else
+            second = fmax(second, worst[c]);
+    *margin = best_a - second;
+    return best;
+}
+
+Test(triangulate_loop, corner_fan_from_the_best_corner)
+{
+    ism_sampler s;
+    ism_tape *tape = pf_build_sampler(&pf_unit_sphere, &s);
+    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    ism_fpoint p[16];
+    size_t cases = 0, not_ear_only = 0;
+    for (int which = -1; which <= 1; which++) {
+        double node[6];
+        pf_sweep_box(base, 5, which, node);
+        for (size_t n = 5; n <= 16; n++)
+            for (int seed = 0; seed < 12; seed++) {
+                /* jittered angles and heights on the sphere (points on one circle would
+                   see every chord under one angle: all fans alike) */
+                double step = 2 * M_PI / (double)n;
+                for (size_t i = 0; i < n; i++) {
+                    double t = step * ((double)i + 0.45 * sin(2.3 * (double)(i + 1) * (seed + 1) +
+                                                              0.7 * (double)n));
+                    double z = 0.6 + 0.08 * cos(1.9 * (double)(i + 2) * (seed + 1)),
+                           r = sqrt(1 - z * z);
+                    p[i] = (ism_fpoint){{r * cos(t), r * sin(t), z}, {0, 0, 0}, 0};
+                    ism_sample_grad(&s, p[i].p, p[i].g);
+                }
+                double margin;
+                size_t want = best_fan_by_hand(p, n, &margin);
+                if (!(margin > 1e-9))
+                    continue;
+                ism_cell_out o = {0};
+                cr_assert(ism_triangulate_loop(&s, p, n, 1.0, node, 1.0, &o));
+                if (o.ntris != n - 2) { /* the corner fan measured beyond 1 or in a face */
+                    out_free(&o);
+                    continue;
+                }
+                cr_assert_eq(o.tris[0], (uint32_t)want, "box %d n %zu seed %d: fan from %u, "
+                             "by hand %zu", which, n, seed, o.tris[0], want);
+                /* the winner's worst triangle is not one of its two ears */
+                double ears = fmin(smallest_angle(p[want].p, p[(want + 1) % n].p,
+                                                  p[(want + 2) % n].p),
+                                   smallest_angle(p[want].p, p[(want + n - 2) % n].p,
+                                                  p[(want + n - 1) % n].p));
+                double all = M_PI;
+                for (size_t i = 1; i + 1 < n; i++)
+                    all = fmin(all, smallest_angle(p[want].p, p[(want + i) % n].p,
+                                                   p[(want + i + 1) % n].p));
+                not_ear_only += all < ears;
+                cases++;
+                out_free(&o);
+            }
+    }
+    cr_assert(cases > 200, "%zu cases", cases);
+    cr_assert(not_ear_only > 0, "no winner's fan is worst inside (%zu cases)", cases);
     ism_eval_ws_free(s.ws);
     ism_tape_free(tape);
 }
