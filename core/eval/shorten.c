@@ -4,6 +4,7 @@
  * choices, a backward pass keeps only the instructions the result still needs, and the
  * decided min/max become a copy (or a constant). Register numbers are kept, so the
  * workspace of the original tape serves the shortened one. */
+#include "core/eval/shorten.h"
 #include "core/eval/interval_eval.h"
 #include "core/eval/workspace.h"
 
@@ -156,15 +157,29 @@ static size_t mark_needed(const ism_tape *t, ism_eval_ws *ws)
 bool ism_tape_shorten(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
                       ism_interval z, ism_tape *out, ism_interval *range)
 {
+    ism_interval r;
+    bool ran = ism_tape_shorten_pass(t, ws, x, y, z, &r);
+    if (range)
+        *range = r;
+    return ran && ism_tape_shorten_recorded(t, ws, out);
+}
+
+bool ism_tape_shorten_pass(const ism_tape *t, ism_eval_ws *ws, ism_interval x, ism_interval y,
+                           ism_interval z, ism_interval *range)
+{
     if (!ism_ws_fits(ws, t)) {
-        if (range)
-            *range = (ism_interval){ -INFINITY, INFINITY };
+        *range = (ism_interval){ -INFINITY, INFINITY };
         return false;
     }
     memset(ws->choice, BOTH, t->len);
-    ism_interval r = ism_interval_run(t, ws, x, y, z, ws->choice);
-    if (range)
-        *range = r;
+    *range = ism_interval_run(t, ws, x, y, z, ws->choice);
+    return true;
+}
+
+const uint8_t *ism_tape_shorten_choices(const ism_eval_ws *ws) { return ws->choice; }
+
+bool ism_tape_shorten_recorded(const ism_tape *t, ism_eval_ws *ws, ism_tape *out)
+{
     if (!out || out == t || out->cap < t->len || out->nregs < t->nregs)
         return false;
     if (mark_needed(t, ws) == t->len)

@@ -122,6 +122,16 @@ bool ism_build_count_nodes(build *b, thread_state *th);
  * proves min/max branches dominated). */
 const ism_tape *ism_build_node_range(build *b, thread_state *th, const ism_node *nd,
                                      const ism_tape *tape, ism_interval *range);
+/* The scratch tape ism_build_node_range shortens nd's tape into, when it shortens by
+ * ism_tape_shorten (the build shortens and nd's level has one that can hold tape's
+ * shortening), else NULL. */
+ism_tape *ism_build_shorten_into(const build *b, thread_state *th, const ism_node *nd,
+                                 const ism_tape *tape);
+/* ism_tape_shorten's pass of ism_build_node_range alone (shorten.h: false when it cannot
+ * run, *range then the whole line): f's interval over nd on tape into *range (counted as
+ * one), the choices at its min/max in th->s.ws. */
+bool ism_build_node_choices(build *b, thread_state *th, const ism_node *nd,
+                            const ism_tape *tape, ism_interval *range);
 /* Is fresh node nd split whatever its test says? */
 bool ism_build_forced_split(const build *b, const ism_node *nd);
 /* The intervals of nd's 8 children over tape, in one batched call. */

@@ -19,6 +19,7 @@
 #include "core/octree/thin_search.h"
 #include "core/octree/turned.h"
 #include "core/octree/zero_free.h"
+#include "core/eval/shorten.h"
 #include "core/util/parallel.h"
 #include "core/util/grow.h"
 #include "core/util/zeroed.h"
@@ -85,6 +86,26 @@ const ism_tape *ism_build_node_range(build *b, thread_state *th, const ism_node 
     }
     *range = ism_eval_interval(tape, th->s.ws, x, y, z);
     return tape;
+}
+
+ism_tape *ism_build_shorten_into(const build *b, thread_state *th, const ism_node *nd,
+                                 const ism_tape *tape)
+{
+    ism_tape *out = b->shortening ? th->tapes[nd->level] : NULL;
+    if (!out || out == tape || out->cap < tape->len || out->nregs < tape->nregs)
+        return NULL;
+    return out;
+}
+
+bool ism_build_node_choices(build *b, thread_state *th, const ism_node *nd,
+                            const ism_tape *tape, ism_interval *range)
+{
+    double lo[3], hi[3];
+    node_box(b->grid, nd, lo, hi);
+    th->s.n_interval++;
+    return ism_tape_shorten_pass(tape, th->s.ws, (ism_interval){lo[0], hi[0]},
+                                 (ism_interval){lo[1], hi[1]}, (ism_interval){lo[2], hi[2]},
+                                 range);
 }
 
 /* f and ∇f at the node's corners, through the thread's memo (neighbours share corners;
