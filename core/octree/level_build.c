@@ -183,7 +183,9 @@ static bool level_room(const build *b, level_vec *lv)
  * ism_build_node_range and tape_id find them: a child whose pass records the choices at sub's
  * min/max that one before it recorded takes the number that one's shortening got
  * (shorten_memo.h) without shortening. Barth's sextic at E 0.0259 (callgrind, one thread,
- * ism_mesh_surface): of 30,592 children, ... */
+ * ism_mesh_surface; main 9300ff0f): 30,448 of 30,592 such children met their tape and choices
+ * before, 1,133.9M -> 1,109.8M (the backward pass, the copy and tape_id's lookup were ~24M);
+ * at E 0.00389 2,353.1M -> 2,286.3M. */
 static bool child_tape(build *b, thread_state *th, level_tapes *lt, const ism_node *c,
                        const ism_tape *sub, uint32_t id, level_side *sd)
 {
