@@ -139,10 +139,13 @@ void ism_regula_falsi_lanes(ism_sampler *s, const double (*a)[3], const double (
                 t[i] = falsi_root(&q[j]);
                 continue;
             }
-            q[still] = q[j];
-            memcpy(o[still], o[j], sizeof o[0]);
-            memcpy(d[still], d[j], sizeof d[0]);
-            lane[still++] = i;
+            if (still != j) { /* lanes before the first ended search stay where they are */
+                q[still] = q[j];
+                memcpy(o[still], o[j], sizeof o[0]);
+                memcpy(d[still], d[j], sizeof d[0]);
+                lane[still] = i;
+            }
+            still++;
         }
         live = still;
     }
