@@ -30,7 +30,7 @@ ism_tape *ism_tape_new_like(const ism_tape *t)
     return out;
 }
 
-static int is_min_max(int op)
+bool ism_op_is_min_max(int op)
 {
     return op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR
         || op == ISM_OP_MAX_RC;
@@ -39,7 +39,7 @@ static int is_min_max(int op)
 bool ism_tape_has_min_max(const ism_tape *t)
 {
     for (size_t i = 0; i < t->len; i++)
-        if (is_min_max(t->code[i].op))
+        if (ism_op_is_min_max(t->code[i].op))
             return true;
     return false;
 }
@@ -145,7 +145,7 @@ static size_t mark_needed(const ism_tape *t, ism_eval_ws *ws)
         ws->choice[i] |= KEEP;
         kept++;
         needed[in->out] = 0;
-        unsigned choice = is_min_max(in->op) ? ws->choice[i] & CHOICE_MASK : BOTH;
+        unsigned choice = ism_op_is_min_max(in->op) ? ws->choice[i] & CHOICE_MASK : BOTH;
         if (ism_op_has_reg_a(in->op) && choice != ONLY_B)
             needed[in->a] = 1;
         if (ism_op_has_reg_b(in->op) && choice != ONLY_A)
@@ -189,7 +189,7 @@ bool ism_tape_shorten_recorded(const ism_tape *t, ism_eval_ws *ws, ism_tape *out
         if (!(ws->choice[i] & KEEP))
             continue;
         const ism_instr *in = &t->code[i];
-        unsigned choice = is_min_max(in->op) ? ws->choice[i] & CHOICE_MASK : BOTH;
+        unsigned choice = ism_op_is_min_max(in->op) ? ws->choice[i] & CHOICE_MASK : BOTH;
         out->code[n++] = choice == BOTH ? *in : decided(in, choice);
     }
     out->len = n;

@@ -10,6 +10,9 @@
 
 #include <stdint.h>
 
+/* Is op a min or max, the operations shortening decides (abs is a kink it keeps)? */
+bool ism_op_is_min_max(int op);
+
 /* ism_tape_shorten's pass: f's interval over the box x × y × z into *range, and the choices
  * at t's min/max (and abs) in ws (ism_tape_shorten_choices). False, *range the whole line
  * and nothing recorded, when ws does not fit t (ism_tape_shorten then returns false). */

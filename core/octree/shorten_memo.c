@@ -3,6 +3,7 @@
  * short list of keys met (a list: a tape's keys are few, 3 to the power of its undecided
  * min/max at most, and Barth's sextic and the gyroid ball have one max). */
 #include "core/octree/shorten_memo.h"
+#include "core/eval/shorten.h"
 #include "core/expr/tape.h"
 #include "core/util/grow.h"
 
@@ -23,12 +24,6 @@ struct ism_shorten_memo_entry {
     uint32_t next; /* 1 + the tape's next entry (0: none) */
 };
 
-static bool is_min_max(int op)
-{
-    return op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR
-        || op == ISM_OP_MAX_RC;
-}
-
 /* Tape id's slot, room made (zeroed) up to it. */
 static ism_shorten_memo_tape *slot(ism_shorten_memo *m, uint32_t id)
 {
@@ -48,7 +43,7 @@ static bool learn(ism_shorten_memo *m, ism_shorten_memo_tape *mt, const ism_tape
 {
     size_t n = 0;
     for (size_t i = 0; i < t->len; i++)
-        n += is_min_max(t->code[i].op);
+        n += ism_op_is_min_max(t->code[i].op);
     if (n > ISM_SHORTEN_MEMO_MAX_KINKS || t->len > UINT32_MAX) {
         mt->state = TAPE_UNKEYED;
         return true;
@@ -58,7 +53,7 @@ static bool learn(ism_shorten_memo *m, ism_shorten_memo_tape *mt, const ism_tape
     mt->at = (uint32_t)m->nat;
     mt->n = (uint8_t)n;
     for (size_t i = 0; i < t->len; i++)
-        if (is_min_max(t->code[i].op))
+        if (ism_op_is_min_max(t->code[i].op))
             m->at[m->nat++] = (uint32_t)i;
     mt->state = TAPE_KEYED;
     return true;
