@@ -116,7 +116,7 @@ static bool gather_tiles(ism_cell_ctx *cx, int32_t node, size_t first[7])
 {
     cx->ntiles = 0;
     tile_gather tg = {cx, first, 0};
-    if (!ism_octree_node_tiles(cx->tree, cx->parent, node, keep_tile, &tg))
+    if (!ism_octree_node_tiles(cx->tree, cx->parent, node, &cx->nbs, keep_tile, &tg))
         return false;
     for (; tg.face <= 6; tg.face++)
         first[tg.face] = cx->ntiles;

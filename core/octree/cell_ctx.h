@@ -20,6 +20,7 @@ typedef struct ism_cell_ctx {
     ism_sampler s;
     const ism_octree *tree;
     const int32_t *parent;    /* each node's parent in tree (ism_octree_parents) */
+    ism_nb_memo nbs;          /* the last parent's neighbours (octree.h; zeroed: empty) */
     const ism_breaks *breaks;
     const struct ism_root_table *found; /* the roots the octree build searched on node edges
                                            (root_table.h), or NULL */

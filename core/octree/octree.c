@@ -207,11 +207,38 @@ static void node_neighbours(const ism_octree *t, const int32_t *parent, int32_t 
     }
 }
 
+/* node_neighbours through memo: the parent's neighbours (found once for its children in a
+ * row), then one step down each toward the node (node_neighbours' last step); a face inside
+ * the parent has the node's sibling across it (the node's own index settles it). */
+static void memo_neighbours(const ism_octree *t, const int32_t *parent, int32_t node,
+                            ism_nb_memo *memo, int32_t nb[6])
+{
+    int32_t p = parent[node];
+    if (memo->of != p + 1 || memo->nodes != t->nodes || memo->parent != parent) {
+        *memo = (ism_nb_memo){t->nodes, parent, p + 1, {0}};
+        node_neighbours(t, parent, p, memo->nb);
+    }
+    int32_t first = t->nodes[p].child;
+    int k = node - first;
+    for (int face = 0; face < 6; face++) {
+        int axis = face / 2, flip = 1 << axis;
+        int32_t j = memo->nb[face];
+        if ((k >> axis & 1) != face % 2)
+            j = first + (k ^ flip);
+        else if (j >= 0 && t->nodes[j].child >= 0)
+            j = t->nodes[j].child + (k ^ flip);
+        nb[face] = j;
+    }
+}
+
 bool ism_octree_node_tiles(const ism_octree *t, const int32_t *parent, int32_t node,
+                           ism_nb_memo *memo,
                            bool (*emit)(void *ctx, int face, const ism_tile *tile), void *ctx)
 {
     int32_t nb[6];
-    if (parent)
+    if (parent && memo && node > 0)
+        memo_neighbours(t, parent, node, memo, nb);
+    else if (parent)
         node_neighbours(t, parent, node, nb);
     else /* no ancestors to climb: each neighbour searched from the root */
         for (int face = 0; face < 6; face++)

@@ -7,7 +7,9 @@
  * faces in one climb of the node's ancestors, each neighbour found by flipping the face's bit
  * of the node's path; without parents, each searched from the root) against the same oracle
  * face by face: the same tiles bit for bit, each told its own face, on the torus, Barth's
- * sextic and the gyroid ball. */
+ * sextic and the gyroid ball; with parents, through one memo of the last parent's neighbours
+ * kept from node to node, the nodes visited in order (siblings in a row: memo hits) and
+ * scattered (mostly refilled). */
 #include <criterion/criterion.h>
 #include <stdlib.h>
 #include <string.h>
@@ -92,6 +94,10 @@ typedef struct sweep {
     int placement;
     size_t finer;    /* faces tiled by a finer neighbour's leaves (more than one tile) */
     size_t boundary; /* faces on the search box's boundary (no neighbour) */
+    ism_nb_memo memo; /* one_pass's, kept from node to node of a tree (zeroed for each) */
+    size_t stride;    /* over_nodes visits node i × stride mod n (1: in order, siblings in a
+                         row; a prime: mostly not) */
+    size_t memo_hits; /* nodes one_pass found with their parent's neighbours in the memo */
 } sweep;
 
 /* One node's faces checked: counts into w. */
@@ -108,8 +114,9 @@ static void over_nodes(const pf_surface *s, node_check check, sweep *w)
         build(t, w->placement, &tree);
         int32_t *parent = ism_octree_parents(&tree);
         cr_assert(parent);
+        memset(&w->memo, 0, sizeof w->memo);
         for (size_t i = 0; i < tree.n; i++)
-            check(&tree, parent, i, w);
+            check(&tree, parent, i * w->stride % tree.n, w);
         free(parent);
         ism_octree_free(&tree);
     }
@@ -138,7 +145,10 @@ static void from_the_parent(const ism_octree *tree, const int32_t *parent, size_
 static void one_pass_from(const ism_octree *tree, const int32_t *parent, size_t i, sweep *w)
 {
     w->all.n = 0;
-    cr_assert(ism_octree_node_tiles(tree, parent, (int32_t)i, keep_with_face, &w->all));
+    if (parent && i > 0)
+        w->memo_hits += w->memo.of == parent[i] + 1;
+    cr_assert(ism_octree_node_tiles(tree, parent, (int32_t)i, parent ? &w->memo : NULL,
+                                    keep_with_face, &w->all));
     size_t at = 0;
     const ism_node *nd = &tree->nodes[i];
     int32_t steps = ism_grid_cell_steps(&tree->grid, nd->level);
@@ -175,12 +185,23 @@ static void one_pass(const ism_octree *tree, const int32_t *parent, size_t i, sw
  * only the own-face answer) and, with `boundary`, faces on the box's boundary counted. */
 static void sweep_checks(const pf_surface *s, node_check check, bool boundary)
 {
-    sweep *w = malloc(sizeof *w);
+    sweep *w = calloc(1, sizeof *w);
     cr_assert(w);
-    over_nodes(s, check, w);
-    cr_assert_gt(w->finer, 100);
-    if (boundary)
-        cr_assert_gt(w->boundary, 0);
+    /* in order, then in a scattered order (the memo mostly refilled, each node's parent's
+       neighbours from a stale one), through both the memo's hits and its misses */
+    size_t strides[2] = {1, 7919}, hits[2];
+    for (int k = 0; k < 2; k++) {
+        w->stride = strides[k];
+        w->memo_hits = 0;
+        over_nodes(s, check, w);
+        hits[k] = w->memo_hits;
+        cr_assert_gt(w->finer, 100);
+        if (boundary)
+            cr_assert_gt(w->boundary, 0);
+    }
+    if (check == one_pass)
+        cr_assert(hits[0] > 1000 && hits[1] < hits[0] / 4, "memo hits: %zu in order, %zu "
+                  "scattered", hits[0], hits[1]);
     free(w);
 }
 
