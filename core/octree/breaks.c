@@ -213,13 +213,14 @@ static bool digit_offsets(builder *w, size_t n)
     return true;
 }
 
-/* Sorts the n keys of a, `bits` bits each, carrying vals along when not NULL (tk, tv: room
- * for n more of each). */
+/* Sorts the n keys of a, `bits` bits each, by their bits from `low` up, stably (keys equal
+ * there keep their order: a sorted by its lower bits already ends sorted whole), carrying
+ * vals along when not NULL (tk, tv: room for n more of each). */
 static void radix_sort(builder *w, uint64_t *a, uint32_t *vals, uint64_t *tk, uint32_t *tv,
-                       size_t n, int bits)
+                       size_t n, int low, int bits)
 {
     w->src = a, w->dst = tk, w->vsrc = vals, w->vdst = tv;
-    for (w->shift = 0; w->shift < bits && n; w->shift += RADIX_BITS) {
+    for (w->shift = low; w->shift < bits && n; w->shift += RADIX_BITS) {
         run_blocks(w, n, count_digits);
         if (!digit_offsets(w, n))
             continue;
@@ -296,12 +297,16 @@ static void link_block(void *ctx, size_t blk, int thread)
 }
 
 /* The successors along `axis` (0 or 1) of the n points of w->k: re-keyed line by line along
- * it with their index, sorted, and read off consecutive pairs on one line. */
+ * it with their index, sorted, and read off consecutive pairs on one line. Sorted by the
+ * line alone (the two top fields: a pass fewer wherever 2 cb fits in fewer digits than 3 cb):
+ * w->k is sorted along z, by (x, y, z), so the points of one line already come in order
+ * along it, x ascending for a line (y, z) and y ascending for a line (z, x), and the stable
+ * sort keeps that order: the same array as sorting the whole keys (all distinct). */
 static void link_axis(builder *w, size_t n, int axis)
 {
     w->axis = axis;
     run_blocks(w, n, rekey);
-    radix_sort(w, w->ak, w->idx, w->tk, w->tv, n, 3 * w->pk.cb);
+    radix_sort(w, w->ak, w->idx, w->tk, w->tv, n, w->pk.cb, 3 * w->pk.cb);
     run_blocks(w, n, link_block);
 }
 
@@ -387,7 +392,7 @@ static bool distinct_corners(builder *w, size_t *out)
     run_blocks(w, t->n, gather_corners);
     n = ism_counts_to_offsets(w->gathered, w->nblocks);
     run_blocks(w, n, pack_gathered);
-    radix_sort(w, w->k, NULL, w->tk, NULL, n, 3 * w->pk.cb);
+    radix_sort(w, w->k, NULL, w->tk, NULL, n, 0, 3 * w->pk.cb);
     run_blocks(w, n, count_distinct);
     *out = ism_counts_to_offsets(w->per_block, w->nblocks);
     run_blocks(w, n, copy_distinct);
