@@ -50,7 +50,8 @@ typedef struct ism_cell_ctx {
     size_t nbp, cap_bp;
     ism_fevent *ev;
     size_t nev, cap_ev;
-    int *gap;                 /* per boundary point: the sign after it, its segment's test */
+    struct ism_walk_gap *gap; /* per boundary point: its segment's memo slot, the sign after
+                                 it (face_lines.c) */
     size_t cap_gap;
     ism_flines lines;
     ism_loops loops;

@@ -336,46 +336,59 @@ static bool rootless(const ism_cell_ctx *cx, const ism_bpoint *lo, const ism_bpo
                                        lo->gn, hi->gn);
 }
 
-/* Asks for the memo entry of a→b (the walk reads it soon after); false when the segment
- * is rootless and needs none. */
-static bool prefetch_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b)
+/* What the walk keeps of a boundary point between its two passes (tile_events): the memo
+ * slot of its segment to the next point and that segment's keys, found once (the slot is
+ * asked for from memory in the first pass, read in the second), and the sign of f just
+ * after the point. */
+typedef struct ism_walk_gap {
+    ism_segment_entry *seg; /* NULL: the segment is rootless (no slot looked at) */
+    uint64_t ka, kb;        /* with seg: its lower and upper lattice keys */
+    int sign;
+} ism_walk_gap;
+
+/* Fills gap's segment a→b: its memo slot and keys, the slot asked for from memory (the walk
+ * reads it soon after), or none when the segment is rootless and needs none. */
+static void ask_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b,
+                        ism_walk_gap *gap)
 {
     bool forward = is_forward(a);
     const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
-    if (rootless(cx, lo, hi))
-        return false;
-    __builtin_prefetch(segment_entry(cx, ism_lattice_key(lo->ip), ism_lattice_key(hi->ip)), 1);
-    return true;
-}
-
-/* Roots of the segment a→b in walking order, computed in the canonical direction; none
- * without a look when `may_have_roots` is false (prefetch_segment said it is rootless). */
-static inline __attribute__((always_inline)) void
-walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b, bool may_have_roots,
-             ism_seg_roots *out)
-{
-    if (!may_have_roots) {
-        out->n = 0;
-        out->flags = 0;
+    if (rootless(cx, lo, hi)) {
+        gap->seg = NULL;
         return;
     }
+    gap->ka = ism_lattice_key(lo->ip);
+    gap->kb = ism_lattice_key(hi->ip);
+    gap->seg = segment_entry(cx, gap->ka, gap->kb);
+    __builtin_prefetch(gap->seg, 1);
+}
+
+/* No root (a rootless segment's answer). */
+static const ism_seg_roots no_roots = {0, 0, {{0}}};
+
+/* Roots of the segment a→b in walking order, computed in the canonical direction into its
+ * memo slot (gap, from ask_segment; none without a look when it has none): the slot's own
+ * roots, or *rev when they are two walked downward (there reversed). The answer is read
+ * before the memo is asked again. */
+static inline __attribute__((always_inline)) const ism_seg_roots *
+walk_segment(ism_cell_ctx *cx, const ism_bpoint *a, const ism_bpoint *b,
+             const ism_walk_gap *gap, ism_seg_roots *rev)
+{
+    ism_segment_entry *e = gap->seg;
+    if (!e)
+        return &no_roots;
     bool forward = is_forward(a);
-    const ism_bpoint *lo = forward ? a : b, *hi = forward ? b : a;
-    uint64_t ka = ism_lattice_key(lo->ip), kb = ism_lattice_key(hi->ip);
-    ism_segment_entry *e = segment_entry(cx, ka, kb);
-    if (e->a == ka && e->b == kb) {
-        *out = e->roots;
-    } else {
-        compute_segment(cx, lo, hi, ka, kb, out);
-        e->a = ka;
-        e->b = kb;
-        e->roots = *out;
+    if (e->a != gap->ka || e->b != gap->kb) {
+        compute_segment(cx, forward ? a : b, forward ? b : a, gap->ka, gap->kb, &e->roots);
+        e->a = gap->ka;
+        e->b = gap->kb;
     }
-    if (!forward && out->n == 2) {
-        ism_root r = out->r[0];
-        out->r[0] = out->r[1];
-        out->r[1] = r;
-    }
+    if (forward || e->roots.n != 2)
+        return &e->roots;
+    *rev = e->roots;
+    rev->r[0] = e->roots.r[1];
+    rev->r[1] = e->roots.r[0];
+    return rev;
 }
 
 /* The roots of the canonical segment lo→hi, with two roots closer than the stitching
@@ -429,48 +442,47 @@ static inline __attribute__((always_inline)) bool tile_events(ism_cell_ctx *cx)
 {
     cx->nev = 0;
     size_t n = cx->nbp;
-    /* per point: the sign after it, then whether its segment may hold roots */
-    if (cx->cap_gap < 2 * n) {
-        int *v = realloc(cx->gap, 2 * n * sizeof *v);
+    if (cx->cap_gap < n) {
+        ism_walk_gap *v = realloc(cx->gap, n * sizeof *v);
         if (!v)
             return false;
         cx->gap = v;
-        cx->cap_gap = 2 * n;
+        cx->cap_gap = n;
     }
-    int *gap_after_point = cx->gap;
+    ism_walk_gap *gap = cx->gap;
     for (size_t i = 0; i < n; i++)
-        gap_after_point[n + i] = prefetch_segment(cx, &cx->bp[i], &cx->bp[(i + 1) % n]);
+        ask_segment(cx, &cx->bp[i], &cx->bp[i + 1 < n ? i + 1 : 0], &gap[i]);
     /* first pass: the sign just after each lattice point and the roots on its segment */
     for (size_t i = 0; i < n; i++) {
-        const ism_bpoint *a = &cx->bp[i], *b = &cx->bp[(i + 1) % n];
-        ism_seg_roots sr;
-        walk_segment(cx, a, b, gap_after_point[n + i], &sr);
+        const ism_bpoint *a = &cx->bp[i], *b = &cx->bp[i + 1 < n ? i + 1 : 0];
+        ism_seg_roots rev;
+        const ism_seg_roots *r = walk_segment(cx, a, b, &gap[i], &rev);
         int sa = ism_sign(a->f), sb = ism_sign(b->f);
-        uint8_t many = sr.flags & ISM_SEG_MANY_ROOTS ? ISM_FP_MANY : 0;
-        if (sr.n == 0) {
-            gap_after_point[i] = rootless_sign(cx, a, b);
+        uint8_t many = r->flags & ISM_SEG_MANY_ROOTS ? ISM_FP_MANY : 0;
+        if (r->n == 0) {
+            gap[i].sign = rootless_sign(cx, a, b);
         } else {
-            gap_after_point[i] = sa;
+            gap[i].sign = sa;
         }
         if (a->f == 0) {
             ism_fpoint z;
             memcpy(z.p, a->p, sizeof z.p);
             memcpy(z.g, a->g, sizeof z.g);
             z.flags = ISM_FP_ZERO;
-            if (!push_event(cx, &z, SIGN_UNKNOWN, gap_after_point[i], i)) /* filled below */
+            if (!push_event(cx, &z, SIGN_UNKNOWN, gap[i].sign, i)) /* filled below */
                 return false;
         }
-        if (sr.n == 1 && sr.r[0].kind == ISM_ROOT_CROSS) {
-            ism_fpoint q = root_point(&sr.r[0], many);
+        if (r->n == 1 && r->r[0].kind == ISM_ROOT_CROSS) {
+            ism_fpoint q = root_point(&r->r[0], many);
             if (!push_event(cx, &q, sa, sb, i))
                 return false;
-        } else if (sr.n == 1) {
-            ism_fpoint q = root_point(&sr.r[0], ISM_FP_TOUCH | many);
+        } else if (r->n == 1) {
+            ism_fpoint q = root_point(&r->r[0], ISM_FP_TOUCH | many);
             if (!push_event(cx, &q, sa, sa, i))
                 return false;
-        } else if (sr.n == 2) {
-            ism_fpoint q0 = root_point(&sr.r[0], ISM_FP_PAIR | many);
-            ism_fpoint q1 = root_point(&sr.r[1], ISM_FP_PAIR | many);
+        } else if (r->n == 2) {
+            ism_fpoint q0 = root_point(&r->r[0], ISM_FP_PAIR | many);
+            ism_fpoint q1 = root_point(&r->r[1], ISM_FP_PAIR | many);
             if (!push_event(cx, &q0, sa, -sa, i) || !push_event(cx, &q1, -sa, sa, i))
                 return false;
         }
@@ -1216,7 +1228,7 @@ static bool replay(ism_cell_ctx *cx, const ism_tile_memo *m)
 /* Under walk_every_tile, quiet_by_corners' answer for the tile just walked (by_corners)
  * checked against the walk, tile by tile: the shortcut holds exactly for a walk that collected
  * the four corners alone, found every side rootless (no segment looked at: tile_events left
- * that in cx->gap after the points' signs) and no event, and was no zero tile. Counted in
+ * that in cx->gap: no segment slot) and no event, and was no zero tile. Counted in
  * corner_checks (tiles quiet by their corners, walked all the same) and corner_mismatches
  * (answers that differ: none where f is finite; a corner where f is not may make a tile
  * whose sides are all rootless span both signs, which the shortcut leaves to the walk). Out
@@ -1226,7 +1238,7 @@ static __attribute__((noinline, cold)) void check_by_corners(ism_cell_ctx *cx, b
 {
     bool idle = !zero && cx->nbp == 4 && cx->nev == 0;
     for (size_t i = 0; idle && i < 4; i++)
-        idle = !cx->gap[4 + i];
+        idle = !cx->gap[i].seg;
     cx->corner_checks += by_corners;
     cx->corner_mismatches += by_corners != idle;
 }
