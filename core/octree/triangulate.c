@@ -55,22 +55,39 @@ bool ism_cell_out_vert(ism_cell_out *o, const ism_fpoint *p, uint32_t *idx)
 }
 
 /* Appends pts[0 .. n), in reverse order when flip, as ism_cell_out_vert would one by one
- * (one capacity check for the polygon). */
+ * (one capacity check for the polygon; in order, one copy). */
 static bool out_polygon(ism_cell_out *o, const ism_fpoint *pts, size_t n, bool flip)
 {
     if (!out_reserve(o, n))
         return false;
+    if (!flip) {
+        memcpy(o->verts + o->nverts, pts, n * sizeof *pts);
+        o->nverts += n;
+        return true;
+    }
     for (size_t i = 0; i < n; i++)
-        o->verts[o->nverts++] = pts[flip ? n - 1 - i : i];
+        o->verts[o->nverts++] = pts[n - 1 - i];
     return true;
+}
+
+/* Room for n more triangles in o (false when memory runs out). */
+static inline bool tris_reserve(ism_cell_out *o, size_t n)
+{
+    return ism_grow((void **)&o->tris, &o->cap_tris, o->ntris + n, 3 * sizeof *o->tris, 256);
+}
+
+/* Appends triangle a, b, c to o, whose room tris_reserve made. */
+static inline void push_tri(ism_cell_out *o, uint32_t a, uint32_t b, uint32_t c)
+{
+    uint32_t *t = o->tris + 3 * o->ntris++;
+    t[0] = a, t[1] = b, t[2] = c;
 }
 
 bool ism_cell_out_tri(ism_cell_out *o, uint32_t a, uint32_t b, uint32_t c)
 {
-    if (!ism_grow((void **)&o->tris, &o->cap_tris, o->ntris + 1, 3 * sizeof *o->tris, 256))
+    if (!tris_reserve(o, 1))
         return false;
-    uint32_t *t = o->tris + 3 * o->ntris++;
-    t[0] = a, t[1] = b, t[2] = c;
+    push_tri(o, a, b, c);
     return true;
 }
 
@@ -400,10 +417,11 @@ static size_t best_corner(polygon *pg, bool *in_face, bool *folds)
 static bool fan_from_corner(ism_cell_out *out, size_t base, size_t n, size_t c)
 {
     uint32_t b = (uint32_t)base;
+    if (!tris_reserve(out, n - 2))
+        return false;
     for (size_t i = 1; i + 1 < n; i++)
-        if (!ism_cell_out_tri(out, b + (uint32_t)c, b + (uint32_t)((c + i) % n),
-                      b + (uint32_t)((c + i + 1) % n)))
-            return false;
+        push_tri(out, b + (uint32_t)c, b + (uint32_t)((c + i) % n),
+                 b + (uint32_t)((c + i + 1) % n));
     return true;
 }
 
@@ -597,9 +615,16 @@ static bool split_quad(ism_cell_out *out, uint32_t b, const polygon *pg)
     else if (fan_folds(pg, &q[first ? 0 : 1], &pg->u[first ? 0 : 1]) &&
              !fan_folds(pg, &q[first ? 1 : 0], &pg->u[first ? 1 : 0]))
         first = !first;
-    if (first)
-        return ism_cell_out_tri(out, b, b + 1, b + 2) && ism_cell_out_tri(out, b, b + 2, b + 3);
-    return ism_cell_out_tri(out, b + 1, b + 2, b + 3) && ism_cell_out_tri(out, b + 1, b + 3, b);
+    if (!tris_reserve(out, 2))
+        return false;
+    if (first) {
+        push_tri(out, b, b + 1, b + 2);
+        push_tri(out, b, b + 2, b + 3);
+    } else {
+        push_tri(out, b + 1, b + 2, b + 3);
+        push_tri(out, b + 1, b + 3, b);
+    }
+    return true;
 }
 
 /* A polygon of four or more points, emitted at base: split, fanned from a corner under the
@@ -625,9 +650,10 @@ static bool triangulate_polygon(ism_sampler *s, ism_cell_out *out, size_t base, 
     uint32_t ci;
     if (!ism_cell_out_vert(out, &c, &ci)) /* pg->q is not read again: this may move it */
         return false;
+    if (!tris_reserve(out, n))
+        return false;
     for (size_t i = 0; i < n; i++)
-        if (!ism_cell_out_tri(out, ci, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
-            return false;
+        push_tri(out, ci, b + (uint32_t)i, b + (uint32_t)((i + 1) % n));
     return true;
 }
 
@@ -719,9 +745,10 @@ static bool fan(const ism_fpoint *pts, size_t n, const ism_fpoint *apex, bool fl
         return false;
     uint32_t b = (uint32_t)base;
     size_t edges = n == 2 ? 1 : n; /* a one-edge polygon gives one triangle */
+    if (!tris_reserve(out, edges))
+        return false;
     for (size_t i = 0; i < edges; i++)
-        if (!ism_cell_out_tri(out, a, b + (uint32_t)i, b + (uint32_t)((i + 1) % n)))
-            return false;
+        push_tri(out, a, b + (uint32_t)i, b + (uint32_t)((i + 1) % n));
     return true;
 }
 
