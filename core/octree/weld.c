@@ -74,6 +74,7 @@ typedef struct welder {
     size_t mask;
     size_t *voff;            /* per piece: the number of its first vertex (npieces + 1) */
     const double **at;       /* per vertex number: its position (first in its piece only) */
+    uint64_t *hash;          /* per vertex number: hash_point of it (same) */
     uint32_t *slot;          /* per vertex number: its position's slot (same) */
     uint32_t *rep;           /* per vertex number: the number of its position's first in
                                 its piece, then its first in all */
@@ -89,11 +90,11 @@ typedef struct welder {
 
 #define NUMBER_OF(slot) ((uint32_t)(slot) - 1)
 
-/* Records vertex number g at p, keeping the smallest number per position, and notes its
+/* Records vertex number g at p (its hash h), keeping the smallest number per position, and notes its
  * slot. The tag (the hash's high half) spares reading the positions of most other keys. */
-static void insert(welder *w, uint32_t g, const double p[3])
+static void insert(welder *w, uint32_t g, const double p[3], uint64_t h)
 {
-    uint64_t h = hash_point(p), tag = h & 0xffffffff00000000ull, mine = tag | (g + 1ull);
+    uint64_t tag = h & 0xffffffff00000000ull, mine = tag | (g + 1ull);
     for (size_t i = h & w->mask;; i = (i + 1) & w->mask) {
         uint64_t cur = atomic_load_explicit(&w->slots[i], memory_order_relaxed);
         while (!cur) /* an empty slot: take it, or see who did */
@@ -110,10 +111,12 @@ static void insert(welder *w, uint32_t g, const double p[3])
     }
 }
 
-/* The slot of p in a piece's own table (piece-local vertex index + 1; 0: empty). */
-static uint32_t *local_slot(uint32_t *table, size_t mask, const ism_fpoint *v, const double p[3])
+/* The slot of p (its hash h) in a piece's own table (piece-local vertex index + 1; 0:
+ * empty). */
+static uint32_t *local_slot(uint32_t *table, size_t mask, const ism_fpoint *v, const double p[3],
+                            uint64_t h)
 {
-    for (size_t i = hash_point(p) & mask;; i = (i + 1) & mask)
+    for (size_t i = h & mask;; i = (i + 1) & mask)
         if (!table[i] || same_point(v[table[i] - 1].p, p))
             return &table[i];
 }
@@ -130,10 +133,12 @@ static void dedupe_piece(void *ctx, size_t k, int thread)
         cap *= 2;
     memset(table, 0, cap * sizeof *table);
     for (size_t i = 0; i < o->nverts; i++) {
-        uint32_t *e = local_slot(table, cap - 1, o->verts, o->verts[i].p);
+        uint64_t h = hash_point(o->verts[i].p);
+        uint32_t *e = local_slot(table, cap - 1, o->verts, o->verts[i].p, h);
         if (!*e) {
             *e = (uint32_t)i + 1;
             w->at[first + i] = o->verts[i].p;
+            w->hash[first + i] = h; /* for the shared table (insert_piece) */
             distinct++;
         }
         w->rep[first + i] = (uint32_t)(first + *e - 1);
@@ -148,7 +153,7 @@ static void insert_piece(void *ctx, size_t k, int thread)
     welder *w = ctx;
     for (size_t g = w->voff[k]; g < w->voff[k + 1]; g++)
         if (w->rep[g] == g)
-            insert(w, (uint32_t)g, w->at[g]);
+            insert(w, (uint32_t)g, w->at[g], w->hash[g]);
 }
 
 /* Pass 3: every vertex's first occurrence in all pieces; counts the piece's new vertices. */
@@ -242,9 +247,10 @@ static void write_piece(void *ctx, size_t k, int thread)
 typedef struct filler {
     ism_mesh *m;
     uint32_t *number; /* per vertex: 1 + its place among the vertices without a normal; 0 */
-    size_t *per_block; /* such vertices (then triangles touching them) per block, then where
-                          the block's start */
-    uint32_t *touching; /* the triangles with such a corner, in triangle order */
+    size_t *per_block; /* such vertices per block, then where the block's start; then the
+                          triangles touching them per block */
+    uint32_t *touching; /* per block of triangles, from its first triangle's place on: those
+                           with such a corner, in triangle order */
     double *acc;        /* per such vertex: the sum of its triangles' normals */
 } filler;
 
@@ -280,24 +286,16 @@ static bool touches(const filler *f, size_t t)
     return f->number[c[0]] || f->number[c[1]] || f->number[c[2]];
 }
 
-static void count_touching(void *ctx, size_t blk, int thread)
-{
-    (void)thread;
-    filler *f = ctx;
-    size_t n = 0;
-    for (size_t t = blk * FILL_BLOCK; t < fill_end(blk, f->m->ntris); t++)
-        n += touches(f, t);
-    f->per_block[blk] = n;
-}
-
 static void list_touching(void *ctx, size_t blk, int thread)
 {
     (void)thread;
     filler *f = ctx;
-    uint32_t *out = f->touching + f->per_block[blk];
+    uint32_t *out = f->touching + blk * FILL_BLOCK;
+    size_t n = 0;
     for (size_t t = blk * FILL_BLOCK; t < fill_end(blk, f->m->ntris); t++)
         if (touches(f, t))
-            *out++ = (uint32_t)t;
+            out[n++] = (uint32_t)t;
+    f->per_block[blk] = n;
 }
 
 static void set_missing(void *ctx, size_t blk, int thread)
@@ -309,9 +307,22 @@ static void set_missing(void *ctx, size_t blk, int thread)
             unit_normal(f->acc + 3 * (f->number[v] - 1), f->m->normal + 3 * v);
 }
 
+/* Triangle t's normal (twice its area long) added to its corners that have no normal. */
+static void add_normal(filler *f, uint32_t t)
+{
+    const ism_mesh *m = f->m;
+    const uint32_t *tri = m->tri + 3 * (size_t)t;
+    double n[3];
+    ism_tri_cross3(m->pos + 3 * tri[0], m->pos + 3 * tri[1], m->pos + 3 * tri[2], n);
+    for (int k = 0; k < 3; k++)
+        if (f->number[tri[k]])
+            for (int j = 0; j < 3; j++)
+                f->acc[3 * (f->number[tri[k]] - 1) + j] += n[j];
+}
+
 /* Normals where ∇f vanished: the mean of the adjacent triangles' normals, added up in
  * triangle order on the calling thread; finding those vertices and triangles runs in
- * blocks on pool. */
+ * blocks on pool (each block of triangles lists its own in place: one pass). */
 static void fill_missing_normals(ism_mesh *m, ism_pool *pool, ism_par_cost *cost)
 {
     size_t vblocks = (m->nverts + FILL_BLOCK - 1) / FILL_BLOCK;
@@ -325,19 +336,11 @@ static void fill_missing_normals(ism_mesh *m, ism_pool *pool, ism_par_cost *cost
     if (missing && (f.number = malloc(m->nverts * sizeof *f.number)) &&
         (f.acc = calloc(3 * missing, sizeof *f.acc))) {
         ism_pool_for(pool, vblocks, number_missing, &f, cost);
-        ism_pool_for(pool, tblocks, count_touching, &f, cost);
-        size_t ntouch = ism_counts_to_offsets(f.per_block, tblocks);
-        if ((f.touching = malloc((ntouch ? ntouch : 1) * sizeof *f.touching))) {
+        if ((f.touching = malloc((m->ntris ? m->ntris : 1) * sizeof *f.touching))) {
             ism_pool_for(pool, tblocks, list_touching, &f, cost);
-            for (size_t i = 0; i < ntouch; i++) {
-                const uint32_t *tri = m->tri + 3 * f.touching[i];
-                double n[3];
-                ism_tri_cross3(m->pos + 3 * tri[0], m->pos + 3 * tri[1], m->pos + 3 * tri[2], n);
-                for (int k = 0; k < 3; k++)
-                    if (f.number[tri[k]])
-                        for (int j = 0; j < 3; j++)
-                            f.acc[3 * (f.number[tri[k]] - 1) + j] += n[j];
-            }
+            for (size_t blk = 0; blk < tblocks; blk++) /* triangle order */
+                for (size_t i = 0; i < f.per_block[blk]; i++)
+                    add_normal(&f, f.touching[blk * FILL_BLOCK + i]);
             ism_pool_for(pool, vblocks, set_missing, &f, cost);
         }
     }
@@ -430,10 +433,11 @@ bool ism_weld(const ism_cell_out *pieces, size_t npieces, ism_pool *pool, ism_me
         w.local = malloc((size_t)threads * w.local_cap * sizeof *w.local);
         size_t room = total ? total : 1;
         w.at = malloc(room * sizeof *w.at);
+        w.hash = malloc(room * sizeof *w.hash);
         w.slot = malloc(room * sizeof *w.slot);
         w.rep = malloc(room * sizeof *w.rep);
         w.index = malloc(room * sizeof *w.index);
-        ok = w.local && w.at && w.slot && w.rep && w.index &&
+        ok = w.local && w.at && w.hash && w.slot && w.rep && w.index &&
              weld_all(&w, npieces, pool, cost);
     }
     for (size_t k = 0; ok && k < npieces; k++) {
@@ -448,6 +452,7 @@ bool ism_weld(const ism_cell_out *pieces, size_t npieces, ism_pool *pool, ism_me
     free(w.local);
     free(w.distinct);
     free(w.at);
+    free(w.hash);
     free(w.slot);
     free(w.rep);
     free(w.index);
