@@ -96,6 +96,34 @@ static void grid_pass(cf_polyline *pl, int pass, double pad)
     }
 }
 
+/* The box of each block of CF_SEG_BLOCK entries of every cell (g_blk): the union of its
+ * segments' boxes, the points' own coordinates (a segment's nearest point to q lies in its
+ * box up to the rounding of the foot, far below the query's slack, near_bound). False when
+ * out of memory. */
+static bool block_boxes(cf_polyline *pl, size_t cells)
+{
+    pl->g_blk = malloc((pl->g_start[cells] + 1) * sizeof *pl->g_blk);
+    if (!pl->g_blk)
+        return false;
+    for (size_t c = 0; c < cells; c++)
+        for (uint32_t x0 = pl->g_start[c]; x0 < pl->g_start[c + 1]; x0 += CF_SEG_BLOCK) {
+            double *b = pl->g_blk[x0];
+            for (int k = 0; k < 3; k++) {
+                b[k] = INFINITY;
+                b[3 + k] = -INFINITY;
+            }
+            for (uint32_t x = x0; x < pl->g_start[c + 1] && x < x0 + CF_SEG_BLOCK; x++) {
+                double lo[3], hi[3];
+                seg_box(pl, pl->g_seg[x], lo, hi);
+                for (int k = 0; k < 3; k++) {
+                    b[k] = cf_min2(b[k], lo[k]);
+                    b[3 + k] = cf_max2(b[3 + k], hi[k]);
+                }
+            }
+        }
+    return true;
+}
+
 bool cf_polyline_init(cf_polyline *pl, const double *p, size_t n, bool closed, double step)
 {
     memset(pl, 0, sizeof *pl);
@@ -178,7 +206,7 @@ bool cf_polyline_init(cf_polyline *pl, const double *p, size_t n, bool closed, d
     double mag = fmax(fmax(fabs(lo[0]), fabs(hi[0])),
                       fmax(fmax(fabs(lo[1]), fabs(hi[1])), fmax(fabs(lo[2]), fabs(hi[2]))));
     grid_pass(pl, GRID_BOX, CF_QUERY_SLACK * (pl->step + mag));
-    return true;
+    return block_boxes(pl, cells);
 }
 
 void cf_polyline_free(cf_polyline *pl)
@@ -187,6 +215,7 @@ void cf_polyline_free(cf_polyline *pl)
     free(pl->g_start);
     free(pl->g_seg);
     free(pl->g_box);
+    free(pl->g_blk);
     free(pl->ball);
     free(pl->line);
     memset(pl, 0, sizeof *pl);
@@ -397,22 +426,48 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
     return best <= within ? best : INFINITY;
 }
 
-/* The smallest squared distance to the segments filed in cell (i, j, k), below best.
- * Inlined with cell_may_hold and the distance: the ring search reads a dozen cells per
- * query, most of them empty (crossing-spheres' tube: 178k calls, callgrind). The ring
- * search's segments are short beside its queries' distances, so read in the cell's order the
- * ball test (seg_beyond) passed most of them on the way to the nearest (Klein bottle at
- * E 0.00327: 9 measured a query): cell_runs measures the nearest midpoint's first (ties need
- * no order: the distance alone is asked). */
+/* The smallest squared distance to the segments filed in cell (i, j, k), below best (always
+ * finite here: nearest_distance starts from its reach's bound). Inlined with the distance:
+ * the ring search reads a dozen cells per query, most of them empty (crossing-spheres'
+ * tube: 178k calls, callgrind). Ties need no order (the distance alone is asked), so the
+ * cell's entries are read by blocks (CF_SEG_BLOCK): one beyond the bound by its box is
+ * skipped whole; the others are read as cell_runs reads a run, the nearest midpoint first
+ * (in the cell's order best came down slowly, a segment measured at each step along the
+ * curve), each segment past the ball test (seg_beyond) and the estimate (seg_low2). Reading
+ * every midpoint of the cell (cell_runs) cost the Klein bottle at E 0.00327 about 1,800
+ * instructions a query (66 midpoints: its cells hold about 24 segments). */
 static inline __attribute__((always_inline)) double cell_min2(const cf_polyline *pl, int i,
                                                             int j, int k, const double q[3],
                                                             double best, double mag)
 {
     size_t c = cell_index(pl, i, j, k);
-    double r;
-    if (!cell_may_hold(pl, c, q, best, mag, &r))
+    uint32_t x1 = pl->g_start[c + 1];
+    if (pl->g_start[c] == x1)
         return best;
-    return cell_runs(pl, c, q, mag, best, r, NULL);
+    double r = near_bound(best, mag);
+    const double *cb = pl->g_box[pl->g_start[c]];
+    if (!(ism_sqdist_box3(q, cb, cb + 3) <= r * r))
+        return best;
+    for (uint32_t x0 = pl->g_start[c]; x0 < x1; x0 += CF_SEG_BLOCK) {
+        const double *bb = pl->g_blk[x0];
+        if (!(ism_sqdist_box3(q, bb, bb + 3) <= r * r))
+            continue; /* every segment of the block farther than best */
+        uint32_t n = x1 - x0 < CF_SEG_BLOCK ? x1 - x0 : CF_SEG_BLOCK;
+        const uint32_t *sg = pl->g_seg + x0;
+        double d2[CF_SEG_BLOCK];
+        uint32_t arg = mid_nearest(pl, sg, n, q, d2);
+        for (uint32_t o = 0; o < n; o++) {
+            uint32_t m = arg_first(o, arg);
+            if (seg_beyond(pl, sg[m], d2[m], r) || !(seg_low2(pl, sg[m], q, mag) < best))
+                continue; /* no nearer */
+            double e = seg_dist2(pl, sg[m], q, NULL, NULL);
+            if (e < best) {
+                best = e;
+                r = near_bound(best, mag);
+            }
+        }
+    }
+    return best;
 }
 
 /* The cells at Chebyshev distance ring (in cells) from cell c, within the grid: the smallest
@@ -451,6 +506,14 @@ static double ring_min2(const cf_polyline *pl, const int c[3], int ring, const d
     return best;
 }
 
+/* A squared distance every segment within `within` of a query lies below (INFINITY for an
+ * unbounded reach): a computed distance d <= within has d * d <= within * within within a few
+ * ulps, which the factor exceeds a million times over. */
+static inline double reach_bound(double within)
+{
+    return within > 0 && within < INFINITY ? within * within * (1 + CF_QUERY_SLACK) : INFINITY;
+}
+
 /* The distance alone (no parameter or foot asked): the cells are read in rings round q's
  * own, nearest first. A segment's nearest point to q lies in a cell the segment is filed in;
  * one in ring k + 1 or beyond lies past a face of the block of rings 0..k, so once the
@@ -464,7 +527,10 @@ static double nearest_distance(const cf_polyline *pl, const double q[3], double 
     cell_range(pl, q, q, c, c);
     for (int k = 0; k < 3; k++)
         rings = pl->dim[k] > rings ? pl->dim[k] : rings;
-    double best = INFINITY;
+    /* the search starts from the reach's bound: a segment at least that far is answered
+     * INFINITY either way, so every cell, block and segment beyond it is skipped (from the
+     * first cell on: most of the tube's queries find nothing within reach) */
+    double cap = reach_bound(within), best = cap;
     for (int ring = 0; ring < rings; ring++) {
         best = ring_min2(pl, c, ring, q, best, mag);
         /* the cells not read lie past the faces of the block of rings read, on the sides
@@ -483,6 +549,8 @@ static double nearest_distance(const cf_polyline *pl, const double q[3], double 
         if (clear > within || (clear > 0 && best <= clear * clear))
             break;
     }
+    if (!(best < cap))
+        return INFINITY; /* nothing nearer than the bound: beyond within */
     best = sqrt(best);
     return best <= within ? best : INFINITY;
 }

@@ -132,6 +132,12 @@ typedef struct cf_loops {
 
 void cf_loops_free(cf_loops *ls);
 
+/* Entries of a polyline grid cell whose segments share one box (cf_polyline.g_blk): a cell
+ * holds runs of consecutive segments of its curve (Klein bottle at E 0.00327: about 24), and a
+ * run of 8 spans a few tube radii, so a query within a radius or two of the curve reads one
+ * or two blocks of a cell and skips the rest by one box test each. */
+#define CF_SEG_BLOCK 8
+
 /* A curve's polyline with cumulative arclength s[i] at point i (s[n] = total length when
  * closed: the closing segment), and a uniform grid over its segments for nearest-point
  * queries. */
@@ -152,6 +158,9 @@ typedef struct cf_polyline {
     double (*line)[8];      /* per segment: its midpoint, half its length, unit direction
                                and its largest coordinate's magnitude (conform_curve.c's
                                estimates: no rounding grown into them) */
+    double (*g_blk)[6];     /* at g_start[c] + CF_SEG_BLOCK b: the box of the segments
+                               filed there from that entry on, CF_SEG_BLOCK at most (the
+                               distance alone skips a block whose box is beyond its bound) */
     bool pinch[2];          /* its first / last point is a pinch point (set by the caller
                                after cf_polyline_init; open curves only) */
 } cf_polyline;

@@ -254,6 +254,53 @@ Test(conform_curve, exact_ties_first_segment)
     }
 }
 
+/* The distance alone (the ring search, which starts from its reach's bound and skips blocks
+ * of CF_SEG_BLOCK segments by their boxes) at the reach's very edge: with the reach set to the
+ * distance the foot search finds (d, unbounded), it must answer d bit for bit; one ulp below,
+ * INFINITY. A walk of about 400 segments in cells of about 30 (the tube's Klein bottle fills
+ * its cells with about 24), queried near it and off it, in the three placements. */
+Test(conform_curve, distance_alone_at_the_reach)
+{
+    static double p[3 * NPTS], moved[3 * NPTS];
+    srand(29);
+    p[0] = p[1] = p[2] = 0;
+    for (int i = 1; i < NPTS; i++)
+        for (int k = 0; k < 3; k++)
+            p[3 * i + k] = p[3 * (i - 1) + k] + 0.02 * (urand() - 0.5);
+    const double step = 0.04;
+    const double shift[3][3] = {{0, 0, 0},
+                                {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
+                                {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
+    for (int sh = 0; sh < 3; sh++) {
+        for (size_t i = 0; i < NPTS; i++)
+            for (int k = 0; k < 3; k++)
+                moved[3 * i + k] = p[3 * i + k] + shift[sh][k];
+        cf_polyline pl;
+        cr_assert(cf_polyline_init(&pl, moved, NPTS, false, step));
+        size_t cells = (size_t)pl.dim[0] * (size_t)pl.dim[1] * (size_t)pl.dim[2], most = 0;
+        for (size_t c = 0; c < cells; c++)
+            if (pl.g_start[c + 1] - pl.g_start[c] > most)
+                most = pl.g_start[c + 1] - pl.g_start[c];
+        cr_assert(most > 3 * CF_SEG_BLOCK, "a cell of %zu segments at most", most);
+        for (int i = 0; i < 2000; i++) {
+            double q[3], s, foot[3];
+            size_t j = (size_t)rand() % (NPTS - 1);
+            double spread = i % 2 ? 0.01 : 0.1; /* beside the walk, or cells away */
+            for (int k = 0; k < 3; k++)
+                q[k] = moved[3 * j + k] + spread * (2 * urand() - 1);
+            double d = cf_polyline_nearest(&pl, q, INFINITY, &s, foot);
+            cr_assert(isfinite(d) && d > 0);
+            double at = cf_polyline_nearest(&pl, q, d, NULL, NULL);
+            double below = cf_polyline_nearest(&pl, q, nextafter(d, 0), NULL, NULL);
+            cr_assert(at == d, "placement %d query %d: %.17g at its own distance %.17g", sh, i,
+                      at, d);
+            cr_assert(isinf(below), "placement %d query %d: %.17g an ulp inside %.17g", sh, i,
+                      below, d);
+        }
+        cf_polyline_free(&pl);
+    }
+}
+
 /* The points tri_in_tube may spare (the edge midpoints and the centroid) of the triangle c,
  * with its corners' distances as vertex_distance gives them (not finite beyond r + reach):
  * each one cf_far_by_corners calls far must be farther than r by the brute force. Returns
