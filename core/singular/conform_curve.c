@@ -388,6 +388,14 @@ static inline __attribute__((always_inline)) double cell_runs(const cf_polyline 
     return best;
 }
 
+/* A squared distance every segment within `within` of a query lies below (INFINITY for an
+ * unbounded reach): a computed distance d <= within has d * d <= within * within within a few
+ * ulps, which the factor exceeds a million times over. */
+static inline double reach_bound(double within)
+{
+    return within > 0 && within < INFINITY ? within * within * (1 + CF_QUERY_SLACK) : INFINITY;
+}
+
 /* The nearest point of the segments filed in the cells within `within` of q (INFINITY when
  * none lies that close). A cell whose box is farther than the nearest so far is skipped:
  * none of its segments would have replaced it (the first of equals is kept), so the answer
@@ -405,7 +413,12 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
     }
     int a[3], b[3];
     cell_range(pl, lo, hi, a, b);
-    double best = INFINITY, mag = cf_max2(fabs(q[0]), cf_max2(fabs(q[1]), fabs(q[2])));
+    /* from the reach's bound (reach_bound): a cell or segment beyond it is not read (one
+     * tied with the nearest never is: the tests keep equals), and nothing found below it is
+     * INFINITY, as a nearest beyond within was (its foot is not written then; no caller
+     * reads a foot it was answered INFINITY for) */
+    double cap = reach_bound(within), best = cap;
+    double mag = cf_max2(fabs(q[0]), cf_max2(fabs(q[1]), fabs(q[2])));
     near_hit hit = {0, 0, {0, 0, 0}};
     for (int k = a[2]; k <= b[2]; k++)
         for (int j = a[1]; j <= b[1]; j++)
@@ -415,13 +428,13 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
                 if (cell_may_hold(pl, c, q, best, mag, &r))
                     best = cell_runs(pl, c, q, mag, best, r, &hit);
             }
-    if (best < INFINITY) {
-        if (s)
-            *s = pl->s[hit.sg] + hit.t * (pl->s[hit.sg + 1] - pl->s[hit.sg]);
-        if (foot)
-            for (int u = 0; u < 3; u++)
-                foot[u] = hit.f[u];
-    }
+    if (!(best < cap))
+        return INFINITY;
+    if (s)
+        *s = pl->s[hit.sg] + hit.t * (pl->s[hit.sg + 1] - pl->s[hit.sg]);
+    if (foot)
+        for (int u = 0; u < 3; u++)
+            foot[u] = hit.f[u];
     best = sqrt(best);
     return best <= within ? best : INFINITY;
 }
@@ -504,14 +517,6 @@ static double ring_min2(const cf_polyline *pl, const int c[3], int ring, const d
         }
     }
     return best;
-}
-
-/* A squared distance every segment within `within` of a query lies below (INFINITY for an
- * unbounded reach): a computed distance d <= within has d * d <= within * within within a few
- * ulps, which the factor exceeds a million times over. */
-static inline double reach_bound(double within)
-{
-    return within > 0 && within < INFINITY ? within * within * (1 + CF_QUERY_SLACK) : INFINITY;
 }
 
 /* The distance alone (no parameter or foot asked): the cells are read in rings round q's

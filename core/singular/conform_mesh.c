@@ -3,6 +3,7 @@
  * triangles, and the final compaction (dead triangles and orphaned vertices dropped, normals
  * of the vertices where ∇f vanishes taken from their triangles as the welder does). */
 #include "core/singular/conform_internal.h"
+#include "core/util/grow.h"
 #include "core/util/clock.h"
 #include "core/util/sort_u64.h"
 #include "core/util/vec3.h"
@@ -141,8 +142,10 @@ bool cf_poll_clock(cf_ctx *c)
 bool cf_memo_reset(cf_ctx *c)
 {
     size_t n = c->m->nverts + 1;
-    if (!cf_grow((void **)&c->memo_d, &c->cap_memo_d, n, sizeof *c->memo_d) ||
-        !cf_grow((void **)&c->memo_i, &c->cap_memo_i, n, sizeof *c->memo_i) ||
+    /* the answers' room not zeroed (ism_grow): they are read only where memo_gen says one
+     * was written (a generation at least the first, gen_base); memo_gen's is (cf_grow) */
+    if (!ism_grow((void **)&c->memo_d, &c->cap_memo_d, n, sizeof *c->memo_d, n) ||
+        !ism_grow((void **)&c->memo_i, &c->cap_memo_i, n, sizeof *c->memo_i, n) ||
         !cf_grow((void **)&c->memo_gen, &c->cap_memo_gen, n, sizeof *c->memo_gen))
         return false; /* grow zeroes new room: generation 0, never current */
     if (++c->gen == 0) {
@@ -178,7 +181,8 @@ bool cf_add_triangle(cf_ctx *c, uint32_t a, uint32_t b, uint32_t d)
     if (a == b || b == d || a == d)
         return true; /* a ring that collapsed onto its neighbour: nothing to fill */
     cf_poll(c, 1); /* the refill ends at its next ring once this says stop */
-    if (!cf_grow((void **)&c->dead, &c->cap_dead, c->m->ntris + 1, 1) ||
+    /* the new mark is written below: its room needs no zeroing (ism_grow) */
+    if (!ism_grow((void **)&c->dead, &c->cap_dead, c->m->ntris + 1, 1, c->m->ntris + 1) ||
         !ism_mesh_add_triangle(c->m, a, b, d))
         return false;
     c->dead[c->m->ntris - 1] = 0;

@@ -257,7 +257,8 @@ Test(conform_curve, exact_ties_first_segment)
 /* The distance alone (the ring search, which starts from its reach's bound and skips blocks
  * of CF_SEG_BLOCK segments by their boxes) at the reach's very edge: with the reach set to the
  * distance the foot search finds (d, unbounded), it must answer d bit for bit; one ulp below,
- * INFINITY. A walk of about 400 segments in cells of about 30 (the tube's Klein bottle fills
+ * INFINITY. The foot search, which starts from the same bound, likewise, with the very foot
+ * and parameter it found unbounded. A walk of about 400 segments in cells of about 30 (the tube's Klein bottle fills
  * its cells with about 24), queried near it and off it, in the three placements. */
 Test(conform_curve, distance_alone_at_the_reach)
 {
@@ -296,6 +297,13 @@ Test(conform_curve, distance_alone_at_the_reach)
                       at, d);
             cr_assert(isinf(below), "placement %d query %d: %.17g an ulp inside %.17g", sh, i,
                       below, d);
+            /* the foot search too: the same foot, bit for bit, at its own distance */
+            double s2, foot2[3], at2 = cf_polyline_nearest(&pl, q, d, &s2, foot2);
+            cr_assert(at2 == d && s2 == s, "placement %d query %d: %.17g at %.17g, parameter "
+                      "%.17g for %.17g", sh, i, at2, d, s2, s);
+            for (int k = 0; k < 3; k++)
+                cr_assert(foot2[k] == foot[k]);
+            cr_assert(isinf(cf_polyline_nearest(&pl, q, nextafter(d, 0), &s2, foot2)));
         }
         cf_polyline_free(&pl);
     }
