@@ -709,6 +709,21 @@ Test(dual_cert, models_made_at_once_are_the_models_made_one_by_one)
     ism_tape_free(t);
 }
 
+/* Models m[0..n) over lo[k]..hi[k] and their answers ok[k] are ism_dual_taylor's, to the
+ * bit (case: the caller's case, in the messages). */
+static void expect_one_by_one(const ism_tape *t, ism_ivjet_ws *jw, const double (*lo)[3],
+                              const double (*hi)[3], size_t n, const ism_dual_model *m,
+                              const bool *ok, int case_no)
+{
+    for (size_t k = 0; k < n; k++) {
+        ism_dual_model want;
+        uint64_t count = 0;
+        bool one = ism_dual_taylor(t, jw, lo[k], hi[k], &want, &count);
+        cr_assert_eq(ok[k], one, "case %#x, box %zu", case_no, k);
+        cr_assert(memcmp(&m[k], &want, sizeof want) == 0, "case %#x, box %zu", case_no, k);
+    }
+}
+
 /* ism_dual_taylor_many on some of the boxes of a batch of natural enclosures just taken, as
  * ism_dual_pre_models calls it (the children whose tails tighten, a subset of kid_kinds's
  * batch, in its order): every subset of a batch of 1 to 8 tube cells, up to 96 of them a
@@ -743,18 +758,13 @@ Test(dual_cert, models_of_some_of_a_batchs_boxes_are_the_models_made_one_by_one)
             }
             ism_ivgrad g[ISM_IVGRAD_BATCH];
             cr_assert(ism_eval_interval_grad_batch(t, jw, (const ism_interval (*)[3])box, nb, g));
-            ism_dual_model m[ISM_IVGRAD_BATCH], want;
+            ism_dual_model m[ISM_IVGRAD_BATCH];
             bool ok[ISM_IVGRAD_BATCH];
             cr_assert(ism_dual_taylor_many(t, jw, (const double (*)[3])slo,
                                            (const double (*)[3])shi, np, m, ok));
-            for (size_t k = 0; k < np; k++) {
-                uint64_t count = 0;
-                bool one = ism_dual_taylor(t, jw, slo[k], shi[k], &want, &count);
-                cr_assert_eq(ok[k], one, "batch %zu, pick %#x, box %zu", nb, pick, k);
-                cr_assert(memcmp(&m[k], &want, sizeof want) == 0, "batch %zu, pick %#x, box %zu",
-                          nb, pick, k);
-                models++;
-            }
+            expect_one_by_one(t, jw, (const double (*)[3])slo, (const double (*)[3])shi, np, m,
+                              ok, (int)(nb << 8 | pick));
+            models += np;
             in_one_group += groups != 3;
             across += groups == 3;
         }
@@ -763,6 +773,47 @@ Test(dual_cert, models_of_some_of_a_batchs_boxes_are_the_models_made_one_by_one)
     cr_assert(in_one_group > 50 && across > 200, "%zu in one group, %zu across", in_one_group,
               across);
     cr_assert(models > 1000, "%zu", models);
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
+
+/* ism_dual_taylor_pair gives each of its two boxes ism_dual_taylor's model to the bit: the
+ * torus's tube cells (three sizes, on the lattice and moved off it by 1e-3 and by √2 − 1 of
+ * a cell), each with a cell of its size and placement farther out from the axis (as two
+ * sub-boxes of a proof are alike) and with one of another size, so a box's jet or centre taken
+ * from the other box's lane shows as a differing bound. On a tape with a min (the lanes tell
+ * no kinks) it declines, and ism_dual_taylor one by one is then the way. */
+Test(dual_cert, models_made_in_pairs_are_the_models_made_one_by_one)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    cr_assert(jw);
+    size_t pairs = 0;
+    for (int i = 0; i < TUBE_CELLS; i++)
+        for (int other = 1; other <= 2; other++) {
+            double lo[2][3], hi[2][3];
+            tube_cell(i, lo[0], hi[0]);
+            tube_cell((i + (other == 1 ? 9 : 1)) % TUBE_CELLS, lo[1], hi[1]);
+            ism_dual_model m[2];
+            bool ok[2];
+            cr_assert(ism_dual_taylor_pair(t, jw, (const double (*)[3])lo,
+                                           (const double (*)[3])hi, m, ok));
+            expect_one_by_one(t, jw, (const double (*)[3])lo, (const double (*)[3])hi, 2, m, ok,
+                              2 * i + other);
+            pairs++;
+        }
+    cr_assert(pairs == 2 * TUBE_CELLS, "%zu", pairs);
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+
+    static const pf_surface cut = {"min(x^2 + y^2 + z^2 - 1, 0.3 - z)", NULL, 0, NULL, 0};
+    t = pf_compile(&cut);
+    jw = ism_ivjet_ws_new(t);
+    const double lo[2][3] = {{0.1, 0.1, 0.2}, {-0.5, -0.5, -0.5}};
+    const double hi[2][3] = {{0.3, 0.3, 0.4}, {-0.3, -0.3, -0.3}};
+    ism_dual_model m[2];
+    bool ok[2];
+    cr_assert(!ism_dual_taylor_pair(t, jw, lo, hi, m, ok), "a tape with a min: declined");
     ism_ivjet_ws_free(jw);
     ism_tape_free(t);
 }
