@@ -70,25 +70,34 @@ enum { ROW_MEETS = 1, /* sure not to be apart from X */
        ROW_WIDE = 2 /* sure not to be inside X */ };
 
 /* The plain-double view of K: Y, c, and per axis the half-width r_j (the smaller distance
- * from c_j to X_j's ends) and gc's midpoint and radius. */
+ * from c_j to X_j's ends) and gc's midpoint and radius; |Y| and the radii of H's entries,
+ * taken once for the three rows, the same values row_sure took per row before (Klein at E
+ * 0.0141, the search's 1,945 calls: 2.62M -> 2.33M instructions). */
 typedef struct k_view {
     const double (*y)[3];
     const double *c;
+    double ya[3][3];          /* |Y| */
     double r[3], gm[3], gr[3];
-    bool ok; /* every r_j > 0 */
+    double hr[6];             /* rad(h_e), xx xy xz yy yz zz */
+    bool ok;                  /* every r_j > 0 */
 } k_view;
 
-static k_view view_of(const ism_interval x[3], const double c[3], const ism_interval gc[3],
-                      const double y[3][3])
+static void view_of(k_view *v, const ism_interval x[3], const double c[3],
+                    const ism_interval gc[3], const ism_interval h[6], const double y[3][3])
 {
-    k_view v = { y, c, { 0 }, { 0 }, { 0 }, true };
+    v->y = y;
+    v->c = c;
+    v->ok = true;
     for (int j = 0; j < 3; j++) {
-        v.r[j] = fmin(c[j] - x[j].lo, x[j].hi - c[j]) * (1.0 - KRAWCZYK_SLACK);
-        v.gm[j] = 0.5 * gc[j].lo + 0.5 * gc[j].hi;
-        v.gr[j] = 0.5 * gc[j].hi - 0.5 * gc[j].lo;
-        v.ok = v.ok && v.r[j] > 0.0;
+        v->r[j] = fmin(c[j] - x[j].lo, x[j].hi - c[j]) * (1.0 - KRAWCZYK_SLACK);
+        v->gm[j] = 0.5 * gc[j].lo + 0.5 * gc[j].hi;
+        v->gr[j] = 0.5 * gc[j].hi - 0.5 * gc[j].lo;
+        v->ok = v->ok && v->r[j] > 0.0;
+        for (int m = 0; m < 3; m++)
+            v->ya[j][m] = fabs(y[j][m]);
     }
-    return v;
+    for (int e = 0; e < 6; e++)
+        v->hr[e] = 0.5 * h[e].hi - 0.5 * h[e].lo;
 }
 
 /* What row i of K is sure to be, from plain doubles (ROW_* bits; 0: nothing sure). The row
@@ -98,7 +107,7 @@ static k_view view_of(const ism_interval x[3], const double c[3], const ism_inte
  * row holds the exact one. So W ≥ w(X_i) rules out "inside", and [a ± W/2] meeting X_i rules
  * out "apart". Each comparison keeps KRAWCZYK_SLACK of its sides; anything non-finite is
  * sure of nothing. */
-static int row_sure(const k_view *v, int i, const ism_interval x[3], const ism_interval h[6])
+static int row_sure(const k_view *v, int i, const ism_interval x[3])
 {
     if (!v->ok)
         return 0;
@@ -106,14 +115,12 @@ static int row_sure(const k_view *v, int i, const ism_interval x[3], const ism_i
     for (int m = 0; m < 3; m++) {
         a -= v->y[i][m] * v->gm[m];
         size += fabs(v->y[i][m] * v->gm[m]);
-        half += fabs(v->y[i][m]) * v->gr[m];
+        half += v->ya[i][m] * v->gr[m];
     }
     for (int j = 0; j < 3; j++) {
         double rad = 0.0;
-        for (int m = 0; m < 3; m++) {
-            ism_interval e = h[sym(m, j)];
-            rad += fabs(v->y[i][m]) * (0.5 * e.hi - 0.5 * e.lo);
-        }
+        for (int m = 0; m < 3; m++)
+            rad += v->ya[i][m] * v->hr[sym(m, j)];
         half += rad * v->r[j];
     }
     half *= 1.0 - KRAWCZYK_SLACK;
@@ -165,10 +172,11 @@ int ism_krawczyk(const ism_interval x[3], const double c[3], const ism_interval 
         }
         return empty ? ISM_KRAWCZYK_EMPTY : inner ? ISM_KRAWCZYK_UNIQUE : ISM_KRAWCZYK_UNKNOWN;
     }
-    k_view v = view_of(x, c, gc, y);
+    k_view v;
+    view_of(&v, x, c, gc, h, y);
     bool not_inside = holds_singular(h), open[3] = { false, false, false };
     for (int i = 0; i < 3; i++) {
-        int sure = row_sure(&v, i, x, h);
+        int sure = row_sure(&v, i, x);
         if (sure & ROW_MEETS) {
             not_inside = not_inside || (sure & ROW_WIDE);
             open[i] = !(sure & ROW_WIDE);

@@ -982,8 +982,10 @@ static int pre_gradients(const search *s, worker *w, const int v[8], const ism_i
  * pre_gradients took, the same functions: no free kink, ∇F may vanish,
  * first_order_holds), in one ism_eval_interval_jet_lanes (bit for bit the one-by-one jets;
  * Hessians alone from the batch's records on tapes without kinks), into pre[m].jet; a lone
- * one (PRE_JETS_MIN) by ism_eval_interval_jet, now, while its record stands. Klein at E
- * 0.00327: the search's jets ~45M -> ~30M instructions, 157.9M -> 146.0M in all. */
+ * one (PRE_JETS_MIN) by ism_eval_interval_jet, now: on tapes without kinks from its record,
+ * which only stands until the next pass (with kinks the pass keeps no record, and the order
+ * does not matter). Klein at E 0.00327: the search's jets ~45M -> ~30M instructions,
+ * 157.9M -> 146.0M in all. */
 static void pre_jets(const search *s, worker *w, const int v[8], const ism_interval *bx,
                      const ism_interval *by, const ism_interval *bz,
                      const ism_interval *const fc[8], ism_interval q, int from, int to,
@@ -1010,7 +1012,8 @@ static void pre_jets(const search *s, worker *w, const int v[8], const ism_inter
     }
     if (!n)
         return;
-    if (n < PRE_JETS_MIN) /* one by one, now: from the pass's record, before the next pass */
+    if (n < PRE_JETS_MIN) /* one by one, now: without kinks from the pass's record, which the
+                             next pass overwrites; with kinks there is none (order free) */
         ism_eval_interval_jet(s->t, w->jw, box[0], NULL, NULL, &jet[0]);
     else if (!ism_eval_interval_jet_lanes(s->t, w->jw, (const ism_interval (*)[3])box, n, jet))
         return;
