@@ -140,6 +140,7 @@ typedef struct worker {
     uint64_t centre_dropped; /* cells the centre test (children_quad) dropped */
     uint64_t grads_batched;  /* cells whose gradients pre_gradients took */
     uint64_t grads_batch_read; /* ... and classify read */
+    struct expansion *ex; /* a task's parents between screening and finish (expand_task) */
 } worker;
 
 /* One task's output: surviving children (their models indexed within models) and boxes, in
@@ -292,7 +293,7 @@ static bool jet_excludes(const ism_ivgrad *gc, const ism_ivjet *j, const ism_int
            || !holds0(ism_dual_terms_f(gc->v, &t));
 }
 
-/* The centre of the cell x, as every test round it takes it (centre_at, expand_cell's
+/* The centre of the cell x, as every test round it takes it (centre_at, expand_prepare's
  * centre lanes): a double within the cell. */
 static inline void centre_of(const ism_interval x[3], double c[3])
 {
@@ -909,52 +910,60 @@ static void finish(search *s, worker *w, task_out *out, scell *c, const ism_inte
     keep(s, w, out, *c, m, x, f, v);
 }
 
-/* The children of expand_cell that classify will take the interval gradient of (left OPEN
- * by screen and not dropped by the centre test; fc[m]: f at child m's centre, or NULL), in
- * order: with centres, at most ISM_IVGRAD_BATCH / 2 of them, their gradients over their
- * boxes and at their centres (smooth_tests' centre_at, taken for every such child: the box's
- * may exclude 0, and then the centre's is not used); without, at most ISM_IVGRAD_BATCH, over
- * their boxes only. In one ism_eval_interval_grad_lanes (or _batch without kinks), bit for
- * bit the one-by-one passes (classify's kept pass; centre_at's), into pre[m]; the jets
+/* A child whose interval gradients a batch takes (pre_gradients): its box and where they
+ * go. */
+typedef struct pre_slot {
+    ism_interval x[3];
+    pre_grad *pre;
+} pre_slot;
+
+/* A parent's children between their screening (expand_prepare) and their finish
+ * (expand_finish): cells, boxes, F intervals and screen's verdicts, f at the centres taken
+ * (at[m] into fc; NULL when not), the parent's children_quad q and what the batches took. */
+typedef struct expansion {
+    scell kids[8];
+    ism_interval bx[8], by[8], bz[8], f[8], fc[8], q;
+    const ism_interval *at[8];
+    int v[8];
+    bool model; /* the parent has a model: its children's centre test ran */
+    pre_grad pre[8];
+} expansion;
+
+/* Child m of e that classify will take the interval gradient of (left OPEN by screen and
+ * not dropped by the centre test) into *sl. */
+static bool open_slot(expansion *e, int m, pre_slot *sl)
+{
+    if (e->v[m] != OPEN || centre_drops(e->at[m], e->q))
+        return false;
+    sl->x[0] = e->bx[m];
+    sl->x[1] = e->by[m];
+    sl->x[2] = e->bz[m];
+    sl->pre = &e->pre[m];
+    return true;
+}
+
+/* The children sl[0..n) that classify will take the interval gradient of, in order: with
+ * centres, at most ISM_IVGRAD_BATCH / 2 of them, their gradients over their boxes and at their
+ * centres (smooth_tests' centre_at, taken for every such child: the box's may exclude 0, and
+ * then the centre's is not used); without, at most ISM_IVGRAD_BATCH, over their boxes only.
+ * In one ism_eval_interval_grad_lanes (or _batch without kinks), bit for bit the one-by-one
+ * passes (classify's kept pass; centre_at's), into each slot's pre_grad; the jets
  * smooth_tests then takes over the boxes take the batch's records as they took the kept
- * pass's. On the torus 2 such children a parent on average, 4 lanes: cheaper than one by
- * one from 2 lanes up (interval_jet.h, ISM_IVGRAD_BATCH's figures). With min, max or abs the
- * lanes list each box's kinks as classify's pass would (ism_eval_interval_grad_lanes).
- * Without centres (a parent without a model: no centre test; only on tapes with kinks) the
- * children's centres are left to centre_at: few of those children reach smooth_tests (Barth
- * at E 0.0259: with the centres 1,287.5M instructions, without 1,273.1M, one by one
- * 1,284.2M). The children from `from` on are looked at (pre[m] reset for those); returns
- * the child after the last one taken, 8 when none is left or there is no batch. */
-static int pre_gradients(const search *s, worker *w, const int v[8], const ism_interval *bx,
-                         const ism_interval *by, const ism_interval *bz,
-                         const ism_interval *const fc[8], ism_interval q, bool centres,
-                         int from, pre_grad pre[8])
+ * pass's (pre_jets, right after). Cheaper than one by one from 2 lanes up (interval_jet.h,
+ * ISM_IVGRAD_BATCH's figures). With min, max or abs the lanes list each box's kinks as
+ * classify's pass would (ism_eval_interval_grad_lanes). Without centres (a parent without a
+ * model: no centre test; only on tapes with kinks) the children's centres are left to
+ * centre_at: few of those children reach smooth_tests (Barth at E 0.0259: with the centres
+ * 1,287.5M instructions, without 1,273.1M, one by one 1,284.2M). Whether they were taken. */
+static bool pre_gradients(const search *s, worker *w, const pre_slot *sl, size_t n, bool centres)
 {
     ism_interval box[ISM_IVGRAD_BATCH][3];
     ism_ivgrad g[ISM_IVGRAD_BATCH];
-    int kid[ISM_IVGRAD_BATCH];
-    size_t n = 0, most = centres ? ISM_IVGRAD_BATCH / 2 : ISM_IVGRAD_BATCH;
-    for (int m = from; m < 8; m++)
-        pre[m].ok = pre[m].jet_ok = false;
-    /* without centres only with kinks: on smooth tapes the torus's search paid more for
-     * those batches than one by one (expand_cell) */
-    if (!s->batch || (!centres && !s->branches))
-        return 8;
-    int m = from;
-    for (; m < 8 && n < most; m++)
-        if (v[m] == OPEN && !centre_drops(fc[m], q))
-            kid[n++] = m;
-    /* a lone box without its centre: one 4-lane group (~2,100 instructions) against its pass
-     * alone (~1,700; interval_jet.h's ISM_IVGRAD_BATCH figures): one by one */
-    if (!centres && n < 2)
-        return 8;
     for (size_t k = 0; k < n; k++) {
-        int m = kid[k];
-        ism_interval x[3] = { bx[m], by[m], bz[m] };
         double c[3];
-        centre_of(x, c);
+        centre_of(sl[k].x, c);
         for (int a = 0; a < 3; a++) {
-            box[k][a] = x[a];
+            box[k][a] = sl[k].x[a];
             if (centres)
                 box[n + k][a] = iv(c[a], c[a]);
         }
@@ -964,9 +973,9 @@ static int pre_gradients(const search *s, worker *w, const int v[8], const ism_i
     const ism_interval (*b)[3] = (const ism_interval (*)[3])box;
     if (!n || !(s->branches ? ism_eval_interval_grad_lanes(s->t, w->jw, b, nb, g, nk)
                             : ism_eval_interval_grad_batch(s->t, w->jw, b, nb, g)))
-        return 8;
+        return false;
     for (size_t k = 0; k < n; k++) { /* field by field: jet is written by pre_jets alone */
-        pre_grad *p = &pre[kid[k]];
+        pre_grad *p = sl[k].pre;
         p->ok = true;
         p->at_ok = centres;
         p->g = g[k];
@@ -974,41 +983,37 @@ static int pre_gradients(const search *s, worker *w, const int v[8], const ism_i
         p->nk = nk[k];
     }
     w->grads_batched += n;
-    return m;
+    return true;
 }
 
-/* After pre_gradients with centres over the children from..to: the jets over the boxes of
- * those whose smooth_tests will take one (classify's and smooth_tests' tests on what
- * pre_gradients took, the same functions: no free kink, ∇F may vanish,
- * first_order_holds), in one ism_eval_interval_jet_lanes (bit for bit the one-by-one jets;
- * Hessians alone from the batch's records on tapes without kinks), into pre[m].jet; a lone
- * one (PRE_JETS_MIN) by ism_eval_interval_jet, now: on tapes without kinks from its record,
+/* After pre_gradients with centres over sl[0..n): the jets over the boxes of those whose
+ * smooth_tests will take one (classify's and smooth_tests' tests on what pre_gradients took,
+ * the same functions: no free kink, ∇F may vanish, first_order_holds), in one
+ * ism_eval_interval_jet_lanes (bit for bit the one-by-one jets; Hessians alone from the
+ * batch's records on tapes without kinks), into their pre_grad's jet; a lone one
+ * (PRE_JETS_MIN) by ism_eval_interval_jet, now: on tapes without kinks from its record,
  * which only stands until the next pass (with kinks the pass keeps no record, and the order
  * does not matter). Klein at E 0.00327: the search's jets ~45M -> ~30M instructions,
  * 157.9M -> 146.0M in all. */
-static void pre_jets(const search *s, worker *w, const int v[8], const ism_interval *bx,
-                     const ism_interval *by, const ism_interval *bz,
-                     const ism_interval *const fc[8], ism_interval q, int from, int to,
-                     pre_grad pre[8])
+static void pre_jets(const search *s, worker *w, const pre_slot *sl, size_t ns)
 {
     ism_interval box[ISM_IVGRAD_BATCH][3];
     ism_ivjet jet[ISM_IVGRAD_BATCH];
-    int kid[ISM_IVGRAD_BATCH];
+    pre_grad *kid[ISM_IVGRAD_BATCH];
     size_t n = 0;
-    for (int m = from; m < to && n < ISM_IVGRAD_BATCH; m++) {
-        const pre_grad *p = &pre[m];
-        if (v[m] != OPEN || centre_drops(fc[m], q) || !p->ok || !p->at_ok || p->nk ||
-            !grad_may_vanish(p->g.d))
+    for (size_t i = 0; i < ns && n < ISM_IVGRAD_BATCH; i++) {
+        pre_grad *p = sl[i].pre;
+        if (!p->ok || !p->at_ok || p->nk || !grad_may_vanish(p->g.d))
             continue;
-        ism_interval x[3] = { bx[m], by[m], bz[m] }, cx[3], dx[3];
+        ism_interval cx[3], dx[3];
         double c[3];
-        centre_of(x, c);
+        centre_of(sl[i].x, c);
         _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
             cx[k] = iv(c[k], c[k]);
-        if (!first_order_holds(x, cx, &p->at, &p->g, dx))
+        if (!first_order_holds(sl[i].x, cx, &p->at, &p->g, dx))
             continue;
-        memcpy(box[n], x, sizeof x);
-        kid[n++] = m;
+        memcpy(box[n], sl[i].x, sizeof box[n]);
+        kid[n++] = p;
     }
     if (!n)
         return;
@@ -1018,19 +1023,17 @@ static void pre_jets(const search *s, worker *w, const int v[8], const ism_inter
     else if (!ism_eval_interval_jet_lanes(s->t, w->jw, (const ism_interval (*)[3])box, n, jet))
         return;
     for (size_t k = 0; k < n; k++) {
-        pre[kid[k]].jet = jet[k];
-        pre[kid[k]].jet_ok = true;
+        kid[k]->jet = jet[k];
+        kid[k]->jet_ok = true;
     }
 }
 
-/* Expands p: its eight children's F intervals in one batch, screened; then, when p has a
- * model, f at the centres of the children left open where centre_worth guesses it may rule
- * them out, in a second batch (point boxes: rigorous enclosures of f there), for
- * children_quad's test; then each child finished in order. */
-static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
+/* p's eight children's F intervals in one batch, screened; then, when p has a model, f at
+ * the centres of the children left open where centre_worth guesses it may rule them out, in
+ * a second batch (point boxes: rigorous enclosures of f there), for children_quad's test.
+ * No gradient taken yet (every pre[m] not ok). */
+static void expand_prepare(search *s, worker *w, const scell *p, expansion *e)
 {
-    ism_interval bx[8], by[8], bz[8], f[8];
-    scell kids[8];
     uint32_t half = 1u << (s->depth - (int)p->level - 1);
     /* the parent's low, middle and high lattice coordinates per axis: each child's bounds
      * are two of them (cell_box's, bit for bit) */
@@ -1042,53 +1045,47 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
         upper[k] = iv(mid, hi);
     }
     for (int m = 0; m < 8; m++) {
-        kids[m].level = (uint8_t)(p->level + 1); /* .model: keep sets it */
-        kids[m].lines = 0;                        /* .lines: set once tested (finish) */
-        kids[m].edges = child_edges(p, (unsigned)m);
+        scell *kid = &e->kids[m];
+        kid->level = (uint8_t)(p->level + 1); /* .model: keep sets it */
+        kid->lines = 0;                       /* .lines: set once tested (finish) */
+        kid->edges = child_edges(p, (unsigned)m);
         for (int k = 0; k < 3; k++)
-            kids[m].i[k] = p->i[k] + ((m >> k) & 1u ? half : 0u);
-        bx[m] = m & 1 ? upper[0] : lower[0];
-        by[m] = m & 2 ? upper[1] : lower[1];
-        bz[m] = m & 4 ? upper[2] : lower[2];
+            kid->i[k] = p->i[k] + ((m >> k) & 1u ? half : 0u);
+        e->bx[m] = m & 1 ? upper[0] : lower[0];
+        e->by[m] = m & 2 ? upper[1] : lower[1];
+        e->bz[m] = m & 4 ? upper[2] : lower[2];
+        e->at[m] = NULL;
+        e->pre[m].ok = e->pre[m].jet_ok = false;
     }
-    ism_eval_interval_batch(s->t, w->ws, bx, by, bz, f, 8);
+    ism_eval_interval_batch(s->t, w->ws, e->bx, e->by, e->bz, e->f, 8);
     w->evals_interval += 8;
     const ism_dual_model *pm = p->model == NO_MODEL ? NULL : &s->models[p->model];
-    ism_dual_model km; /* a child's model, built by its tests */
-    if (!pm) { /* no centre test; with kinks, the open children's gradients in one batch
-                  (without, one by one: the torus's search paid more so) */
-        int v[8];
-        const ism_interval *none[8] = { NULL };
-        pre_grad pre[8];
+    e->model = pm != NULL;
+    e->q = iv(0.0, 0.0);
+    if (!pm) { /* no centre test */
         for (int m = 0; m < 8; m++) {
-            ism_interval x[3] = { bx[m], by[m], bz[m] };
-            v[m] = screen(w, &kids[m], x, f[m], NULL, 0);
-        }
-        pre_gradients(s, w, v, bx, by, bz, none, iv(0.0, 0.0), false, 0, pre);
-        for (int m = 0; m < 8; m++) {
-            ism_interval x[3] = { bx[m], by[m], bz[m] };
-            finish(s, w, out, &kids[m], x, f[m], v[m], NULL, iv(0.0, 0.0), &km, &pre[m]);
+            ism_interval x[3] = { e->bx[m], e->by[m], e->bz[m] };
+            e->v[m] = screen(w, &e->kids[m], x, e->f[m], NULL, 0);
         }
         return;
     }
     parent_rows rows = { .pm = pm, .lower = lower, .upper = upper, .ready = false };
-    int v[8];
-    ism_interval cx[8], cy[8], cz[8], fc[8], q = iv(0.0, 0.0);
+    ism_interval cx[8], cy[8], cz[8];
     size_t lane[8], open = 0;
     bool have_q = false; /* q taken (once, for the first child left open) */
     for (int m = 0; m < 8; m++) {
-        ism_interval x[3] = { bx[m], by[m], bz[m] };
+        ism_interval x[3] = { e->bx[m], e->by[m], e->bz[m] };
         double c[3];
-        v[m] = screen(w, &kids[m], x, f[m], &rows, (unsigned)m);
+        e->v[m] = screen(w, &e->kids[m], x, e->f[m], &rows, (unsigned)m);
         lane[m] = SIZE_MAX;
-        if (v[m] != OPEN)
+        if (e->v[m] != OPEN)
             continue;
         if (!have_q) {
-            q = children_quad(pm, lower, upper);
+            e->q = children_quad(pm, lower, upper);
             have_q = true;
         }
         centre_of(x, c);
-        if (!centre_worth(pm, c, q))
+        if (!centre_worth(pm, c, e->q))
             continue;
         cx[open] = iv(c[0], c[0]);
         cy[open] = iv(c[1], c[1]);
@@ -1096,27 +1093,61 @@ static void expand_cell(search *s, worker *w, task_out *out, const scell *p)
         lane[m] = open++;
     }
     if (open) {
-        ism_eval_interval_batch(s->t, w->ws, cx, cy, cz, fc, open);
+        ism_eval_interval_batch(s->t, w->ws, cx, cy, cz, e->fc, open);
         w->evals_interval += open;
     }
-    const ism_interval *at[8];
     for (int m = 0; m < 8; m++)
-        at[m] = lane[m] == SIZE_MAX ? NULL : &fc[lane[m]];
-    pre_grad pre[8];
-    /* the children in rounds of ISM_IVGRAD_BATCH / 2, each round's jets taken before the
-     * next round's pass overwrites its records; with kinks one round (classify reads the
-     * last pass's kink bytes and registers, ism_ivjet_lane_kinks, ism_ivjet_top_pieces) */
-    for (int from = 0; from < 8;) {
-        int to = pre_gradients(s, w, v, bx, by, bz, at, q, true, from, pre);
-        pre_jets(s, w, v, bx, by, bz, at, q, from, to, pre);
-        from = s->branches ? 8 : to;
-    }
+        e->at[m] = lane[m] == SIZE_MAX ? NULL : &e->fc[lane[m]];
+}
+
+/* One parent's batches, on a tape with kinks (classify reads the last pass's kink bytes and
+ * registers, ism_ivjet_lane_kinks, ism_ivjet_top_pieces, so its children are finished right
+ * after): with a model, its first ISM_IVGRAD_BATCH / 2 such children with their centres and
+ * their jets; without, up to ISM_IVGRAD_BATCH boxes alone, two at the least (a lone box:
+ * one 4-lane group, ~2,100 instructions, against its pass alone, ~1,700). */
+static void batch_kinked(const search *s, worker *w, expansion *e)
+{
+    pre_slot sl[8];
+    size_t n = 0, most = e->model ? ISM_IVGRAD_BATCH / 2 : ISM_IVGRAD_BATCH;
+    for (int m = 0; m < 8 && n < most; m++)
+        n += open_slot(e, m, &sl[n]);
+    if (e->model && pre_gradients(s, w, sl, n, true))
+        pre_jets(s, w, sl, n);
+    else if (!e->model && n >= 2)
+        pre_gradients(s, w, sl, n, false);
+}
+
+/* The batches of a task's parents e[0..n) on a tape without kinks: the children with a
+ * parent with a model, across parents, in rounds of ISM_IVGRAD_BATCH / 2 with their centres,
+ * each round's jets taken before the next round's pass overwrites its records (a parent's
+ * own rounds left ~2 children a round on Klein). Children of parents without a model are
+ * taken one by one (on smooth tapes the torus's search paid more for their batches). */
+static void batch_smooth(const search *s, worker *w, expansion *e, size_t n)
+{
+    pre_slot sl[ISM_IVGRAD_BATCH / 2];
+    size_t k = 0;
+    for (size_t i = 0; i < n; i++)
+        for (int m = 0; e[i].model && m < 8; m++)
+            if (open_slot(&e[i], m, &sl[k]) && ++k == ISM_IVGRAD_BATCH / 2) {
+                if (pre_gradients(s, w, sl, k, true))
+                    pre_jets(s, w, sl, k);
+                k = 0;
+            }
+    if (pre_gradients(s, w, sl, k, true))
+        pre_jets(s, w, sl, k);
+}
+
+/* Each child of e finished in order. */
+static void expand_finish(search *s, worker *w, task_out *out, expansion *e)
+{
+    ism_dual_model km; /* a child's model, built by its tests */
     for (int m = 0; m < 8; m++) {
-        ism_interval x[3] = { bx[m], by[m], bz[m] };
-        finish(s, w, out, &kids[m], x, f[m], v[m], at[m], q, &km, &pre[m]);
+        ism_interval x[3] = { e->bx[m], e->by[m], e->bz[m] };
+        finish(s, w, out, &e->kids[m], x, e->f[m], e->v[m], e->at[m], e->q, &km, &e->pre[m]);
     }
 }
 
+/* Expands a task's frontier cells, in order, into its output. */
 static void expand_task(void *ctx, size_t task, int thread)
 {
     search *s = ctx;
@@ -1125,8 +1156,23 @@ static void expand_task(void *ctx, size_t task, int thread)
     size_t a = task * SEARCH_CELLS_PER_TASK, b = a + SEARCH_CELLS_PER_TASK;
     if (b > s->nfrontier)
         b = s->nfrontier;
+    worker *w = &s->workers[thread];
+    task_out *out = &s->outs[task];
+    if (s->branches) {
+        for (size_t i = a; i < b; i++) {
+            expand_prepare(s, w, &s->frontier[i], &w->ex[0]);
+            if (s->batch)
+                batch_kinked(s, w, &w->ex[0]);
+            expand_finish(s, w, out, &w->ex[0]);
+        }
+        return;
+    }
     for (size_t i = a; i < b; i++)
-        expand_cell(s, &s->workers[thread], &s->outs[task], &s->frontier[i]);
+        expand_prepare(s, w, &s->frontier[i], &w->ex[i - a]);
+    if (s->batch)
+        batch_smooth(s, w, w->ex, b - a);
+    for (size_t i = a; i < b; i++)
+        expand_finish(s, w, out, &w->ex[i - a]);
 }
 
 static void free_workers(search *s)
@@ -1136,6 +1182,7 @@ static void free_workers(search *s)
         ism_ivjet_ws_free(s->workers[i].jw);
         free(s->workers[i].kinks);
         free(s->workers[i].force);
+        free(s->workers[i].ex);
     }
     free(s->workers);
 }
@@ -1152,7 +1199,8 @@ static bool make_workers(search *s)
         w->jw = ism_ivjet_ws_new(s->t);
         w->kinks = calloc(len, 1);
         w->force = calloc(len, 1);
-        if (!w->ws || !w->jw || !w->kinks || !w->force)
+        w->ex = malloc(SEARCH_CELLS_PER_TASK * sizeof *w->ex);
+        if (!w->ws || !w->jw || !w->kinks || !w->force || !w->ex)
             return false;
     }
     return true;
