@@ -36,6 +36,8 @@
 #define PROBE_OVERSHOOT 0.5
 /* A probe stops when a step moves less than this fraction of the box (stuck on its wall). */
 #define PROBE_MIN_MOVE 1e-9
+/* Probes side by side at most (probe_lanes): a box's and its eight octants'. */
+#define PROBE_LANES 9
 
 typedef struct sbox {
     ism_interval x[3];
@@ -53,42 +55,109 @@ static bool flat_along(const ism_interval x[3], int k) { return x[k].lo == x[k].
  * face, along the gradient's part in the face's plane). A step back to the point of two steps
  * before ends the probe: from there it would only visit those two points again (a 2-cycle
  * across a kink, between a CSG wedge's two planes, or clamped on a wall), both evaluated
- * without the other sign. */
+ * without the other sign. One probe's state between its evaluations (probe_start,
+ * probe_take), so that probes may run one at a time (probe) or side by side (probe_lanes). */
+typedef struct probe_run {
+    ism_interval x[3];
+    double p[3], before[3], size;
+    int it;
+} probe_run;
+
+enum { PROBE_GOES_ON, PROBE_HIT, PROBE_MISSED };
+
+static void probe_start(probe_run *r, const ism_interval x[3])
+{
+    r->size = INFINITY;
+    r->it = 0;
+    for (int k = 0; k < 3; k++) {
+        r->x[k] = x[k];
+        r->p[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
+        r->before[k] = NAN; /* equal to nothing */
+        if (!flat_along(x, k))
+            r->size = fmin(r->size, x[k].hi - x[k].lo);
+    }
+}
+
+/* The probe r after f and its gradient g at r->p: HIT (r->p has the other sign), MISSED, or
+ * GOES_ON from its next point, r->p. */
+static int probe_take(probe_run *r, int sign, double f, double g[3])
+{
+    const ism_interval *x = r->x;
+    if (other_sign(f, sign))
+        return PROBE_HIT;
+    for (int k = 0; k < 3; k++)
+        if (flat_along(x, k))
+            g[k] = 0;
+    double gg = ism_dot3(g, g);
+    if (r->it == PROBE_STEPS || !(gg > 0) || !isfinite(gg) || !isfinite(f))
+        return PROBE_MISSED;
+    double t = (1 + PROBE_OVERSHOOT) * f / gg, moved = 0, last[3];
+    double *p = r->p;
+    memcpy(last, p, sizeof last);
+    for (int k = 0; k < 3; k++) {
+        double q = fmin(fmax(p[k] - t * g[k], x[k].lo), x[k].hi);
+        moved += fabs(q - p[k]);
+        p[k] = q;
+    }
+    if (!(moved > PROBE_MIN_MOVE * r->size) ||
+        (p[0] == r->before[0] && p[1] == r->before[1] && p[2] == r->before[2]))
+        return PROBE_MISSED;
+    memcpy(r->before, last, sizeof r->before);
+    r->it++;
+    return PROBE_GOES_ON;
+}
+
 static bool probe(ism_sampler *s, const ism_interval x[3], int sign, double found[3])
 {
-    double p[3], before[3] = {NAN, NAN, NAN}, size = INFINITY; /* NaN: equal to nothing */
-    for (int k = 0; k < 3; k++) {
-        p[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
-        if (!flat_along(x, k))
-            size = fmin(size, x[k].hi - x[k].lo);
-    }
-    for (int it = 0; it <= PROBE_STEPS; it++) {
+    probe_run r;
+    probe_start(&r, x);
+    int v = PROBE_GOES_ON;
+    while (v == PROBE_GOES_ON) {
         double g[3];
-        double f = ism_sample_grad(s, p, g);
-        if (other_sign(f, sign)) {
-            for (int k = 0; k < 3; k++)
-                found[k] = p[k];
-            return true;
-        }
-        for (int k = 0; k < 3; k++)
-            if (flat_along(x, k))
-                g[k] = 0;
-        double gg = ism_dot3(g, g);
-        if (it == PROBE_STEPS || !(gg > 0) || !isfinite(gg) || !isfinite(f))
-            return false;
-        double t = (1 + PROBE_OVERSHOOT) * f / gg, moved = 0, last[3];
-        memcpy(last, p, sizeof last);
-        for (int k = 0; k < 3; k++) {
-            double q = fmin(fmax(p[k] - t * g[k], x[k].lo), x[k].hi);
-            moved += fabs(q - p[k]);
-            p[k] = q;
-        }
-        if (!(moved > PROBE_MIN_MOVE * size) ||
-            (p[0] == before[0] && p[1] == before[1] && p[2] == before[2]))
-            return false;
-        memcpy(before, last, sizeof before);
+        double f = ism_sample_grad(s, r.p, g);
+        v = probe_take(&r, sign, f, g);
     }
-    return false;
+    if (v == PROBE_HIT)
+        memcpy(found, r.p, sizeof r.p);
+    return v == PROBE_HIT;
+}
+
+/* The probes of the boxes b[0..n) (n <= PROBE_LANES) side by side, their points' gradients in one
+ * ism_sample_grad_batch a step (bit for bit one at a time's): what probing them one by one
+ * in order until one hits answers, and found the same point. A probe goes on only while no
+ * earlier one has hit (a later hit cannot be the first). Barth's sextic at E 0.0259 (4,144
+ * calls, 27,232 probes): ism_thin_probe 73.9M -> 70.6M instructions. */
+static bool probe_lanes(ism_sampler *s, const ism_interval (*b)[3], int n, int sign,
+                        double found[3])
+{
+    probe_run r[PROBE_LANES];
+    int state[PROBE_LANES], first_hit = n;
+    for (int c = 0; c < n; c++) {
+        probe_start(&r[c], b[c]);
+        state[c] = PROBE_GOES_ON;
+    }
+    for (;;) {
+        double p[PROBE_LANES][3], f[PROBE_LANES], g[PROBE_LANES][3];
+        int lane[PROBE_LANES], m = 0;
+        for (int c = 0; c < first_hit; c++)
+            if (state[c] == PROBE_GOES_ON) {
+                memcpy(p[m], r[c].p, sizeof p[m]);
+                lane[m++] = c;
+            }
+        if (!m)
+            break;
+        ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)m);
+        for (int j = 0; j < m; j++) {
+            int c = lane[j];
+            state[c] = probe_take(&r[c], sign, f[j], g[j]);
+            if (state[c] == PROBE_HIT && c < first_hit)
+                first_hit = c;
+        }
+    }
+    if (first_hit == n)
+        return false;
+    memcpy(found, r[first_hit].p, sizeof r[first_hit].p);
+    return true;
 }
 
 /* Does the mean-value form prove that f keeps `sign` on the box? *kinked is set when f
@@ -197,11 +266,13 @@ enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const d
     ism_interval x[3];
     for (int k = 0; k < 3; k++)
         x[k] = iv(lo[k], hi[k]);
-    if (probe(s, x, sign, found))
-        return hit;
-    /* the octants (quadrants in a face) in one batched interval: a probe never leaves its
-     * box, so where the interval keeps the corners' sign it cannot find the other one */
-    ism_interval ox[8], oy[8], oz[8], kept[8];
+    /* the box's probe first, then the octants' (quadrants in a face) where their batched
+     * interval leaves the other sign possible (a probe never leaves its box), all side by
+     * side: the first in that order to hit answers, as one by one. The octants' interval is
+     * taken even when the box's probe would hit alone (72 of 4,144 calls on Barth's sextic
+     * at E 0.0259): their probes then stop as soon as it has. */
+    ism_interval open[PROBE_LANES][3], ox[8], oy[8], oz[8], kept[8];
+    memcpy(open[0], x, sizeof open[0]);
     int n = 0;
     for (int c = 0; c < 8; c++) {
         bool twin = false; /* the same octant as an earlier one: the box is flat there */
@@ -218,12 +289,23 @@ enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const d
     }
     s->n_interval += (uint64_t)n;
     ism_eval_interval_batch(s->tape, s->ws, ox, oy, oz, kept, (size_t)n);
-    for (int c = 0; c < n; c++) {
-        ism_interval o[3] = {ox[c], oy[c], oz[c]};
-        if (!keeps_sign(kept[c], sign) && probe(s, o, sign, found))
-            return hit;
-    }
-    return ISM_THIN_UNDECIDED;
+    int m = 1;
+    for (int c = 0; c < n; c++)
+        if (!keeps_sign(kept[c], sign)) {
+            open[m][0] = ox[c], open[m][1] = oy[c], open[m][2] = oz[c];
+            m++;
+        }
+    return probe_lanes(s, (const ism_interval (*)[3])open, m, sign, found) ? hit
+                                                                          : ISM_THIN_UNDECIDED;
+}
+
+bool ism_thin_probe_one(ism_sampler *s, const double lo[3], const double hi[3], int sign,
+                        double found[3])
+{
+    ism_interval x[3];
+    for (int k = 0; k < 3; k++)
+        x[k] = iv(lo[k], hi[k]);
+    return probe(s, x, sign, found);
 }
 
 bool ism_thin_ws_init(ism_thin_ws *w, const ism_tape *t)

@@ -48,6 +48,13 @@ typedef struct ism_thin_ws {
 enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const double hi[3],
                                      int sign, double found[3]);
 
+/* One of ism_thin_probe's Newton probes, from the centre of the box lo..hi (corners of sign
+ * `sign`): true when it reached the other sign, at found. ism_thin_probe runs its probes side
+ * by side and answers as these one by one would, in its order (the box's, then its octants'
+ * in index order), the first to hit. */
+bool ism_thin_probe_one(ism_sampler *s, const double lo[3], const double hi[3], int sign,
+                        double found[3]);
+
 bool ism_thin_ws_init(ism_thin_ws *w, const ism_tape *t);
 void ism_thin_ws_free(ism_thin_ws *w);
 
