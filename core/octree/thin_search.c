@@ -125,8 +125,7 @@ static bool probe(ism_sampler *s, const ism_interval x[3], int sign, double foun
 /* The probes of the boxes b[0..n) (n <= PROBE_LANES) side by side, their points' gradients in one
  * ism_sample_grad_batch a step (bit for bit one at a time's): what probing them one by one
  * in order until one hits answers, and found the same point. A probe goes on only while no
- * earlier one has hit (a later hit cannot be the first). Barth's sextic at E 0.0259 (4,144
- * calls, 27,232 probes): ism_thin_probe 73.9M -> 70.6M instructions. */
+ * earlier one has hit (a later hit cannot be the first). */
 static bool probe_lanes(ism_sampler *s, const ism_interval (*b)[3], int n, int sign,
                         double found[3])
 {
@@ -146,7 +145,10 @@ static bool probe_lanes(ism_sampler *s, const ism_interval (*b)[3], int n, int s
             }
         if (!m)
             break;
-        ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)m);
+        if (m == 1) /* one point: its own pass costs less than a padded group */
+            f[0] = ism_sample_grad(s, p[0], g[0]);
+        else
+            ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)m);
         for (int j = 0; j < m; j++) {
             int c = lane[j];
             state[c] = probe_take(&r[c], sign, f[j], g[j]);
@@ -261,26 +263,31 @@ enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const d
     double scratch[3];
     if (!found)
         found = scratch;
-    enum ism_thin_verdict hit =
-        ism_tape_has_min_max(s->tape) ? ISM_THIN_FOUND_KINKED : ISM_THIN_FOUND;
+    bool kinked = ism_tape_has_min_max(s->tape);
+    enum ism_thin_verdict hit = kinked ? ISM_THIN_FOUND_KINKED : ISM_THIN_FOUND;
     ism_interval x[3];
     for (int k = 0; k < 3; k++)
         x[k] = iv(lo[k], hi[k]);
     /* the box's probe first, then the octants' (quadrants in a face) where their batched
-     * interval leaves the other sign possible (a probe never leaves its box), all side by
-     * side: the first in that order to hit answers, as one by one. The octants' interval is
-     * taken even when the box's probe would hit alone (72 of 4,144 calls on Barth's sextic
-     * at E 0.0259): their probes then stop as soon as it has. */
+     * interval leaves the other sign possible (a probe never leaves its box); the first in
+     * that order to hit answers. Side by side (probe_lanes) where f has a min or max, whose
+     * one-point gradients cost more than a lane's: Barth's sextic at E 0.0259, 4,144 calls,
+     * 73.9M -> 70.6M instructions (the octants' interval then taken even where the box's
+     * probe hits alone, 72 calls). One by one elsewhere: a lane cost the Klein bottle's tape
+     * as much as a point alone, and the calls at E 0.00327 56.9M -> 62.8M side by side. */
+    if (!kinked && probe(s, x, sign, found))
+        return hit;
     ism_interval open[PROBE_LANES][3], ox[8], oy[8], oz[8], kept[8];
-    memcpy(open[0], x, sizeof open[0]);
-    int n = 0;
+    int n = 0, m = 0;
+    if (kinked)
+        memcpy(open[m++], x, sizeof open[0]);
     for (int c = 0; c < 8; c++) {
         bool twin = false; /* the same octant as an earlier one: the box is flat there */
         ism_interval o[3];
         for (int k = 0; k < 3; k++) {
-            double m = 0.5 * lo[k] + 0.5 * hi[k];
+            double mid = 0.5 * lo[k] + 0.5 * hi[k];
             twin |= ((c >> k) & 1) && flat_along(x, k);
-            o[k] = (c >> k) & 1 ? iv(m, hi[k]) : iv(lo[k], m);
+            o[k] = (c >> k) & 1 ? iv(mid, hi[k]) : iv(lo[k], mid);
         }
         if (twin)
             continue;
@@ -289,14 +296,18 @@ enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const d
     }
     s->n_interval += (uint64_t)n;
     ism_eval_interval_batch(s->tape, s->ws, ox, oy, oz, kept, (size_t)n);
-    int m = 1;
     for (int c = 0; c < n; c++)
         if (!keeps_sign(kept[c], sign)) {
             open[m][0] = ox[c], open[m][1] = oy[c], open[m][2] = oz[c];
             m++;
         }
-    return probe_lanes(s, (const ism_interval (*)[3])open, m, sign, found) ? hit
-                                                                          : ISM_THIN_UNDECIDED;
+    const ism_interval (*b)[3] = (const ism_interval (*)[3])open;
+    if (kinked)
+        return probe_lanes(s, b, m, sign, found) ? hit : ISM_THIN_UNDECIDED;
+    for (int c = 0; c < m; c++)
+        if (probe(s, b[c], sign, found))
+            return hit;
+    return ISM_THIN_UNDECIDED;
 }
 
 bool ism_thin_probe_one(ism_sampler *s, const double lo[3], const double hi[3], int sign,

@@ -1,11 +1,12 @@
 /* test_thin_probe_lanes.c — ism_thin_probe runs its Newton probes (the box's, then its
- * octants' where their interval leaves the other sign possible) side by side, and must answer
- * as probing them one by one in that order does: the first to reach the other sign gives
- * the point. The reference is ism_thin_probe_one over the box and then each octant in index
+ * octants' where their interval leaves the other sign possible) side by side where f has a
+ * min or max (one by one elsewhere), and must answer as probing them one by one in that
+ * order does: the first to reach the other sign gives the point. The reference is ism_thin_probe_one over the box and then each octant in index
  * order (an octant whose interval keeps the corners' sign cannot be hit: a probe stays in its
  * box, so the reference probes it too). Verdict and point compared bit for bit over lattice
- * cells of two shapes in the three placements (pf_sweep_box): two balls' product (smooth,
- * sign changes in small pieces) and Barth's sextic in its ball (a max: kinks, many probes).
+ * cells in the three placements (pf_sweep_box) of small balls, as the min of their
+ * functions (side by side), two as their product (smooth: one by one), and of Barth's
+ * sextic in its ball (a max: side by side, many probes).
  * Not vacuous: probes hit, octants hit where the box's own probe missed, and in some boxes a
  * later octant's probe hits in fewer steps than the first one to hit in order (so an answer
  * taken from whichever lane hits first in time would differ). */
@@ -103,6 +104,19 @@ static void sweep(const pf_surface *surf, const double base[6], int d, const cha
                  name);
     ism_eval_ws_free(s.ws);
     ism_tape_free(tape);
+}
+
+Test(thin_probe_lanes, min_of_small_balls_as_one_by_one)
+{
+    pf_surface s = { "min(min(min((x - 0.3)^2 + (y + 0.2)^2 + (z - 0.1)^2 - 0.0025,"
+                     " (x + 0.35)^2 + (y - 0.3)^2 + (z + 0.25)^2 - 0.0016),"
+                     " min((x - 0.45)^2 + (y - 0.05)^2 + (z - 0.4)^2 - 0.0036,"
+                     " (x + 0.05)^2 + (y + 0.45)^2 + (z - 0.55)^2 - 0.0025)),"
+                     " min((x - 0.6)^2 + (y - 0.55)^2 + (z + 0.45)^2 - 0.0016,"
+                     " (x + 0.55)^2 + (y + 0.6)^2 + (z + 0.05)^2 - 0.0036))",
+                     NULL, 0, NULL, 0 };
+    const double base[6] = { -1, -1, -1, 1, 1, 1 };
+    sweep(&s, base, 2, "min of small balls");
 }
 
 Test(thin_probe_lanes, two_balls_as_one_by_one)
