@@ -44,6 +44,15 @@ typedef struct sbox {
     int level;
 } sbox;
 
+/* fmin(fmax(v, lo), hi) as glibc's x86-64 fmax and fmin take it (maxsd, minsd: the second
+ * operand when equal, ±0 included; a NaN v gives lo), inline: the library calls cost Barth's
+ * sextic at E 0.0259 2.5M instructions of its probes' 16.7M. */
+static inline double clamp(double v, double lo, double hi)
+{
+    v = v > lo ? v : lo;
+    return v < hi ? v : hi;
+}
+
 static bool other_sign(double f, int sign) { return sign > 0 ? f < 0 : f > 0; }
 
 static bool keeps_sign(ism_interval v, int sign) { return sign > 0 ? v.lo > 0 : v.hi < 0; }
@@ -61,6 +70,7 @@ typedef struct probe_run {
     ism_interval x[3];
     double p[3], before[3], size;
     int it;
+    bool flat[3]; /* flat_along each axis */
 } probe_run;
 
 enum { PROBE_GOES_ON, PROBE_HIT, PROBE_MISSED };
@@ -73,7 +83,8 @@ static void probe_start(probe_run *r, const ism_interval x[3])
         r->x[k] = x[k];
         r->p[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
         r->before[k] = NAN; /* equal to nothing */
-        if (!flat_along(x, k))
+        r->flat[k] = flat_along(x, k);
+        if (!r->flat[k])
             r->size = fmin(r->size, x[k].hi - x[k].lo);
     }
 }
@@ -86,7 +97,7 @@ static int probe_take(probe_run *r, int sign, double f, double g[3])
     if (other_sign(f, sign))
         return PROBE_HIT;
     for (int k = 0; k < 3; k++)
-        if (flat_along(x, k))
+        if (r->flat[k])
             g[k] = 0;
     double gg = ism_dot3(g, g);
     if (r->it == PROBE_STEPS || !(gg > 0) || !isfinite(gg) || !isfinite(f))
@@ -95,7 +106,7 @@ static int probe_take(probe_run *r, int sign, double f, double g[3])
     double *p = r->p;
     memcpy(last, p, sizeof last);
     for (int k = 0; k < 3; k++) {
-        double q = fmin(fmax(p[k] - t * g[k], x[k].lo), x[k].hi);
+        double q = clamp(p[k] - t * g[k], x[k].lo, x[k].hi);
         moved += fabs(q - p[k]);
         p[k] = q;
     }
