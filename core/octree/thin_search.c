@@ -84,8 +84,9 @@ static void probe_start(probe_run *r, const ism_interval x[3])
         r->p[k] = 0.5 * x[k].lo + 0.5 * x[k].hi;
         r->before[k] = NAN; /* equal to nothing */
         r->flat[k] = flat_along(x, k);
+        double w = x[k].hi - x[k].lo;
         if (!r->flat[k])
-            r->size = fmin(r->size, x[k].hi - x[k].lo);
+            r->size = r->size < w ? r->size : w; /* fmin as clamp takes it */
     }
 }
 
