@@ -39,19 +39,20 @@ typedef struct ism_thin_ws {
  * box's centre and the centres of its eight octants (four quadrants in a face) — an octant
  * only where one batched interval over the eight leaves the other sign possible (a probe
  * stays in its box) — no interval proof. ISM_THIN_FOUND as ism_thin_search; otherwise
- * ISM_THIN_UNDECIDED (nothing found, nothing proven). A ball or a tube a fifth of the box across is reached from the nearest
- * of those centres (each step lands past f = 0); a piece the probes miss is missing from
- * the preview only. ISM_THIN_FOUND_KINKED instead of FOUND when s->tape (shortened to the
- * node) still holds a min or max: a CSG crease may cross the box, whose slivers past the
- * corners the probes find at every level (the gyroid ball at depth 4: 132 "pieces", +22%
- * triangles, when each counted); the caller keeps only what the box's edges do not see. */
+ * ISM_THIN_UNDECIDED (nothing found, nothing proven). A ball or a tube a fifth of the box
+ * across is reached from the nearest of those centres (each step lands past f = 0); a piece
+ * the probes miss is missing from the preview only. ISM_THIN_FOUND_KINKED instead of FOUND
+ * when s->tape (shortened to the node) still holds a min or max: a CSG crease may cross the
+ * box, whose slivers past the corners the probes find at every level (the gyroid ball at
+ * depth 4: 132 "pieces", +22% triangles, when each counted); the caller keeps only what the
+ * box's edges do not see. */
 enum ism_thin_verdict ism_thin_probe(ism_sampler *s, const double lo[3], const double hi[3],
                                      int sign, double found[3]);
 
 /* One of ism_thin_probe's Newton probes, from the centre of the box lo..hi (corners of sign
- * `sign`): true when it reached the other sign, at found. ism_thin_probe runs its probes side
- * by side and answers as these one by one would, in its order (the box's, then its octants'
- * in index order), the first to hit. */
+ * `sign`): true when it reached the other sign, at found. ism_thin_probe (its probes side by
+ * side where f has a min or max) answers as these one by one would, in its order (the box's,
+ * then its octants' in index order), the first to hit. */
 bool ism_thin_probe_one(ism_sampler *s, const double lo[3], const double hi[3], int sign,
                         double found[3]);
 

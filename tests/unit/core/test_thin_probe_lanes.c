@@ -1,9 +1,10 @@
 /* test_thin_probe_lanes.c — ism_thin_probe runs its Newton probes (the box's, then its
  * octants' where their interval leaves the other sign possible) side by side where f has a
  * min or max (one by one elsewhere), and must answer as probing them one by one in that
- * order does: the first to reach the other sign gives the point. The reference is ism_thin_probe_one over the box and then each octant in index
- * order (an octant whose interval keeps the corners' sign cannot be hit: a probe stays in its
- * box, so the reference probes it too). Verdict and point compared bit for bit over lattice
+ * order does: the first to reach the other sign gives the point. The reference is
+ * ism_thin_probe_one over the box and then each octant in index order (an octant whose
+ * interval keeps the corners' sign cannot be hit: a probe stays in its box, so the reference
+ * probes it too). Verdict and point compared bit for bit over lattice
  * cells in the three placements (pf_sweep_box) of small balls, as the min of their
  * functions (side by side), two as their product (smooth: one by one), and of Barth's
  * sextic in its ball (a max: side by side, many probes).
