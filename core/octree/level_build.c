@@ -199,9 +199,9 @@ static bool child_tape(build *b, thread_state *th, level_tapes *lt, const ism_no
         return true;
     }
     uint64_t key;
-    bool keyed = ism_shorten_memo_key(&lt->met, id, sub, ism_tape_shorten_choices(th->s.ws),
-                                      &key);
-    if (keyed && ism_shorten_memo_find(&lt->met, id, key, &sd->tape))
+    enum ism_shorten_memo_found met = ism_shorten_memo_get(
+        &lt->met, id, sub, ism_tape_shorten_choices(th->s.ws), &key, &sd->tape);
+    if (met == ISM_SHORTEN_MEMO_HIT)
         return true;
     const ism_tape *t = sub;
     if (ism_tape_shorten_recorded(sub, th->s.ws, into)) {
@@ -211,7 +211,7 @@ static bool child_tape(build *b, thread_state *th, level_tapes *lt, const ism_no
     if (!tape_id(b, lt, t, sub, id, &sd->tape))
         return false;
     /* unkept (out of memory): met again, it is shortened again */
-    (void)(keyed && ism_shorten_memo_add(&lt->met, id, key, sd->tape));
+    (void)(met == ISM_SHORTEN_MEMO_MISS && ism_shorten_memo_add(&lt->met, id, key, sd->tape));
     return true;
 }
 

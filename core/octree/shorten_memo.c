@@ -59,31 +59,24 @@ static bool learn(ism_shorten_memo *m, ism_shorten_memo_tape *mt, const ism_tape
     return true;
 }
 
-bool ism_shorten_memo_key(ism_shorten_memo *m, uint32_t id, const ism_tape *t,
-                          const uint8_t *choice, uint64_t *key)
+enum ism_shorten_memo_found ism_shorten_memo_get(ism_shorten_memo *m, uint32_t id,
+                                                 const ism_tape *t, const uint8_t *choice,
+                                                 uint64_t *key, uint32_t *to)
 {
-    ism_shorten_memo_tape *mt = slot(m, id);
+    ism_shorten_memo_tape *mt = (size_t)id < m->tape_cap ? &m->tape[id] : slot(m, id);
     if (!mt || (mt->state == TAPE_UNKNOWN && !learn(m, mt, t)) || mt->state != TAPE_KEYED)
-        return false;
+        return ISM_SHORTEN_MEMO_UNKEYED;
     uint64_t k = 0;
     const uint32_t *at = m->at + mt->at;
     for (unsigned j = 0; j < mt->n; j++)
         k |= (uint64_t)(choice[at[j]] & 3u) << (2 * j); /* shorten.c's choice: 0, 1 or 2 */
     *key = k;
-    return true;
-}
-
-bool ism_shorten_memo_find(const ism_shorten_memo *m, uint32_t id, uint64_t key,
-                           uint32_t *out)
-{
-    if ((size_t)id >= m->tape_cap)
-        return false;
-    for (uint32_t e = m->tape[id].first; e; e = m->e[e - 1].next)
-        if (m->e[e - 1].key == key) {
-            *out = m->e[e - 1].to;
-            return true;
+    for (uint32_t e = mt->first; e; e = m->e[e - 1].next)
+        if (m->e[e - 1].key == k) {
+            *to = m->e[e - 1].to;
+            return ISM_SHORTEN_MEMO_HIT;
         }
-    return false;
+    return ISM_SHORTEN_MEMO_MISS;
 }
 
 bool ism_shorten_memo_add(ism_shorten_memo *m, uint32_t id, uint64_t key, uint32_t to)

@@ -30,15 +30,20 @@ typedef struct ism_shorten_memo {
     size_t ne, e_cap;
 } ism_shorten_memo;
 
-/* The key of the choices choice[0, t->len) holds for tape t, number id (its min/max
- * positions found on the first call for id; t must be the same tape every time). False when
- * out of memory or t has more than ISM_SHORTEN_MEMO_MAX_KINKS min/max. */
-bool ism_shorten_memo_key(ism_shorten_memo *m, uint32_t id, const ism_tape *t,
-                          const uint8_t *choice, uint64_t *key);
+/* What ism_shorten_memo_get finds. */
+enum ism_shorten_memo_found {
+    ISM_SHORTEN_MEMO_UNKEYED = -1, /* t has more than ISM_SHORTEN_MEMO_MAX_KINKS min/max, or
+                                      out of memory: shorten it */
+    ISM_SHORTEN_MEMO_MISS = 0,     /* *key set, not met yet: shorten, then add */
+    ISM_SHORTEN_MEMO_HIT = 1       /* *to set: the number met before */
+};
 
-/* The number key gave below tape id, if met (ism_shorten_memo_add). */
-bool ism_shorten_memo_find(const ism_shorten_memo *m, uint32_t id, uint64_t key,
-                           uint32_t *out);
+/* The key of the choices choice[0, t->len) holds for tape t, number id (its min/max
+ * positions found on the first call for id; t must be the same tape every time), and the
+ * number that key gave below id if met (ism_shorten_memo_add). */
+enum ism_shorten_memo_found ism_shorten_memo_get(ism_shorten_memo *m, uint32_t id,
+                                                 const ism_tape *t, const uint8_t *choice,
+                                                 uint64_t *key, uint32_t *to);
 
 /* Records that key below tape id gives tape number `to`; false when out of memory (the memo
  * is then as it was). */

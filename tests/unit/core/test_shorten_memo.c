@@ -74,10 +74,12 @@ static void visit(walk *w, const double lo[3], const double hi[3], uint32_t id, 
     cr_assert(r1.lo == r2.lo && r1.hi == r2.hi, "the pass's range differs from the shortening's");
     uint64_t key;
     uint32_t got;
-    bool keyed = ism_shorten_memo_key(&w->memo, id, t, ism_tape_shorten_choices(w->ws), &key);
+    enum ism_shorten_memo_found met =
+        ism_shorten_memo_get(&w->memo, id, t, ism_tape_shorten_choices(w->ws), &key, &got);
+    bool keyed = met != ISM_SHORTEN_MEMO_UNKEYED;
     if (id == 0)
         cr_assert_eq(keyed, w->f_keyed, "f keyed: %d, expected %d", keyed, w->f_keyed);
-    if (keyed && ism_shorten_memo_find(&w->memo, id, key, &got)) {
+    if (met == ISM_SHORTEN_MEMO_HIT) {
         w->hits++;
         cr_assert_eq(got, fresh, "level %d, below tape %u: the memo gives tape %u, shortening "
                      "afresh tape %u", level, id, got, fresh);
