@@ -437,6 +437,10 @@ static void narrow_op(const ism_instr *in, double *regs, ism_trig_cache *trig, s
     case ISM_OP_MUL_RC: for (size_t j = 0; j < n; j++) o[j] = a[j] * c; return;
     case ISM_OP_SUB_CR: for (size_t j = 0; j < n; j++) o[j] = c - a[j]; return;
     case ISM_OP_SQUARE: for (size_t j = 0; j < n; j++) o[j] = a[j] * a[j]; return;
+    case ISM_OP_SIN: for (size_t j = 0; j < n; j++) o[j] = trig_value(trig, a[j], true); return;
+    case ISM_OP_COS: for (size_t j = 0; j < n; j++) o[j] = trig_value(trig, a[j], false); return;
+    case ISM_OP_MAX_RR: for (size_t j = 0; j < n; j++) o[j] = ism_max(a[j], b[j]); return;
+    case ISM_OP_MIN_RR: for (size_t j = 0; j < n; j++) o[j] = ism_min(a[j], b[j]); return;
     default:
         for (size_t j = 0; j < n; j++)
             o[j] = op_value(in, a[j], regs, ISM_EVAL_BATCH, j, trig);
