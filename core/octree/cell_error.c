@@ -53,16 +53,31 @@ static void centroid_at(loop_pt *q, const double *a, const double *b, const doub
     q->n = 3;
 }
 
-/* The polygon's centre moved toward f = 0 along ∇f, as triangulate.c fans from it. */
-static void centre_on_surface(ism_sampler *s, const double (*p)[3], int n, double c[3])
+/* The mean of the polygon's corners, where centre_on_surface starts. */
+static void corner_mean(const double (*p)[3], int n, double c[3])
 {
     memset(c, 0, 3 * sizeof *c);
     for (int i = 0; i < n; i++)
         for (int k = 0; k < 3; k++)
             c[k] += p[i][k] / n;
+}
+
+/* The polygon's centre moved toward f = 0 along ∇f, as triangulate.c fans from it; f0, g0:
+ * f and ∇f at the corners' mean when the caller has them (ism_sample_grad's bits), else
+ * NULL. */
+static void centre_on_surface(ism_sampler *s, const double (*p)[3], int n, const double *f0,
+                              const double *g0, double c[3])
+{
+    corner_mean(p, n, c);
     for (int it = 0; it < CENTRE_NEWTON_STEPS; it++) {
-        double g[3];
-        double f = ism_sample_grad(s, c, g), gg = ism_dot3(g, g);
+        double g[3], f;
+        if (it == 0 && f0) {
+            f = *f0;
+            memcpy(g, g0, sizeof g);
+        } else {
+            f = ism_sample_grad(s, c, g);
+        }
+        double gg = ism_dot3(g, g);
         if (!isfinite(f) || !isfinite(gg) || !(gg > 0))
             return;
         for (int k = 0; k < 3; k++)
@@ -79,14 +94,22 @@ static bool beyond(double *worst, double d, double bound)
 
 /* The points q[0..n) measured in order into *worst, their gradients in one batch
  * (ism_sample_grad_batch: ism_sample_grad's values); true at the first beyond bound (the
- * points after it were evaluated for nothing: the same answer as one by one). */
+ * points after it were evaluated for nothing: the same answer as one by one). With at
+ * (not NULL), the point at is evaluated in the same batch, not measured: its f and ∇f into
+ * *fa, ga. */
 static bool measure_beyond(ism_sampler *s, const loop_pt *q, int n, double *worst,
-                           double bound)
+                           double bound, const double *at, double *fa, double *ga)
 {
-    double p[LOOP_PTS][3], f[LOOP_PTS], g[LOOP_PTS][3];
+    double p[LOOP_PTS + 1][3], f[LOOP_PTS + 1], g[LOOP_PTS + 1][3];
     for (int i = 0; i < n; i++)
         memcpy(p[i], q[i].p, sizeof p[i]);
-    ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)n);
+    if (at)
+        memcpy(p[n], at, sizeof p[n]);
+    ism_sample_grad_batch(s, (const double (*)[3])p, f, g, (size_t)(n + (at != NULL)));
+    if (at) {
+        *fa = f[n];
+        memcpy(ga, g[n], sizeof g[n]);
+    }
     double plain[LOOP_PTS];
     ism_plain_dists(s, (const double (*)[3])p, f, (const double (*)[3])g, s->dist_above, plain,
                     (size_t)n);
@@ -120,16 +143,22 @@ static double loop_error(ism_sampler *s, const double (*p)[3], int n, double bou
         centroid_at(&q[m++], d0, p[a + 1], d1);
         centroid_at(&q[m++], d0, d1, p[(a + 3) % 4]);
     }
-    if (measure_beyond(s, q, m, &worst, bound) || n == 3 || n == 4)
+    /* a fan's centre starts at the corners' mean: its first gradient rides in the edges'
+       batch (a lane of its padding for up to seven sides) */
+    double c0[3], f0, g0[3];
+    bool fan = n >= 5;
+    if (fan)
+        corner_mean(p, n, c0);
+    if (measure_beyond(s, q, m, &worst, bound, fan ? c0 : NULL, &f0, g0) || !fan)
         return worst;
-    centre_on_surface(s, p, n, c);
+    centre_on_surface(s, p, n, &f0, g0, c);
     m = 0;
     q[m++] = (loop_pt){{c[0], c[1], c[2]}, {NULL, NULL, NULL}, 0};
     for (int i = 0; i < n; i++) {
         midpoint_at(&q[m++], c, p[i]);
         centroid_at(&q[m++], c, p[i], p[(i + 1) % n]);
     }
-    measure_beyond(s, q, m, &worst, bound);
+    measure_beyond(s, q, m, &worst, bound, NULL, NULL, NULL);
     return worst;
 }
 
@@ -143,7 +172,7 @@ static bool loop_tris(ism_sampler *s, const double (*p)[3], int n, ism_cell_out 
         if (i < n)
             memcpy(v.p, p[i], sizeof v.p);
         else if (n >= 5)
-            centre_on_surface(s, p, n, v.p);
+            centre_on_surface(s, p, n, NULL, NULL, v.p);
         else
             break;
         if (!ism_cell_out_vert(out, &v, &idx))
