@@ -54,7 +54,10 @@ static uint64_t hash_point(const double p[3])
 {
     uint64_t b[3];
     for (int k = 0; k < 3; k++) {
-        double v = p[k] + 0.0; /* -0.0 and 0.0 are one point: −0 + 0 = +0, else v = p[k] */
+        /* -0.0 and 0.0 are one point (same_point): −0 + 0 = +0, else v = p[k]. IEEE keeps
+           this add; -ffast-math or -fno-signed-zeros would drop it, and a −0 copy would then
+           hash away from its +0 twin and never be joined (test_weld_negative_zero). */
+        double v = p[k] + 0.0;
         memcpy(&b[k], &v, sizeof b[k]);
     }
     uint64_t h = b[0] * 0x9e3779b97f4a7c15ull ^ b[1] * 0xc2b2ae3d27d4eb4full ^
@@ -90,8 +93,9 @@ typedef struct welder {
 
 #define NUMBER_OF(slot) ((uint32_t)(slot) - 1)
 
-/* Records vertex number g at p (its hash h), keeping the smallest number per position, and notes its
- * slot. The tag (the hash's high half) spares reading the positions of most other keys. */
+/* Records vertex number g at p (its hash h), keeping the smallest number per position, and
+ * notes its slot. The tag (the hash's high half) spares reading the positions of most other
+ * keys. */
 static void insert(welder *w, uint32_t g, const double p[3], uint64_t h)
 {
     uint64_t tag = h & 0xffffffff00000000ull, mine = tag | (g + 1ull);
