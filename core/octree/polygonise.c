@@ -442,7 +442,11 @@ static bool one_leaf(phase2 *p, padded_ctx *pc, size_t chunk, size_t i, ism_cell
  * copied their whole length again (realloc's memcpy: 13.3M instructions of the Klein
  * bottle's E 3.27e-3 mesh, 14.2M of the gyroid ball's at 1.09e-3). Room only: what the
  * chunk emits does not depend on it. Rounds that copy the last round's leaves size the
- * output from those (ism_leaf_memo_reserve) instead. */
+ * output from those (ism_leaf_memo_reserve) instead. No cap: the rate is the mean of the
+ * thread's earlier chunks, so at worst a sparse chunk after dense ones reserves its leaves at
+ * the densest earlier chunk's rate, (that rate / its own) times what it fills; chunks are
+ * contiguous runs of leaves, so that is about one dense chunk's arrays, held until the chunk
+ * is freed after the weld (or by the round's memo). */
 static bool chunk_room(const padded_ctx *pc, size_t nleaves, ism_cell_out *out)
 {
     if (!pc->seen_leaves)
