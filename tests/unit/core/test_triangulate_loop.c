@@ -8,7 +8,8 @@
  * whose fans take two or more batches (corner_fan_error: 2n − 5 points, FAN_POINTS at a
  * time); and the corner the fan starts from, against every corner's fan measured in full here
  * (its triangles' smallest angles by acos). The node in its own box and moved off the lattice
- * (pf_sweep_box). */
+ * (pf_sweep_box), the sphere and the loops' points moved with it (placed_sphere), so that
+ * every placement rounds its own positions, gradients and angles. */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdio.h>
@@ -20,15 +21,45 @@
 #include "core/util/vec3.h"
 #include "poly_fixture.h"
 
-/* n points round the circle z = z0 of the unit sphere, counterclockwise seen from +z (the
- * way ∇f points), their angles jittered by seed; g = ∇f there. */
-static void cap_loop(ism_sampler *s, size_t n, double z0, int seed, ism_fpoint *p)
+static const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+
+/* The node box of placement which (pf_sweep_box of base at depth 5) into node, its move off
+ * base into centre, and a sampler *s of the unit sphere about centre: the sphere moves with
+ * the box (the caller frees s->ws and the tape returned). */
+static ism_tape *placed_sphere(int which, double node[6], double centre[3], ism_sampler *s)
+{
+    pf_sweep_box(base, 5, which, node);
+    for (int k = 0; k < 3; k++)
+        centre[k] = node[k] - base[k];
+    const ism_param prm[] = {{"a", centre[0]}, {"b", centre[1]}, {"c", centre[2]}};
+    const pf_surface sphere = {"(x - a)^2 + (y - b)^2 + (z - c)^2 - 1", prm, 3, NULL, 0};
+    return pf_build_sampler(&sphere, s);
+}
+
+static void sphere_free(ism_sampler *s, ism_tape *tape)
+{
+    ism_eval_ws_free(s->ws);
+    ism_tape_free(tape);
+}
+
+/* The point of the unit sphere about o at angle t round the circle of height z (its
+   radius r), and g = ∇f there. */
+static ism_fpoint on_sphere(ism_sampler *s, const double o[3], double r, double t, double z)
+{
+    ism_fpoint v = {{o[0] + r * cos(t), o[1] + r * sin(t), o[2] + z}, {0, 0, 0}, 0};
+    ism_sample_grad(s, v.p, v.g);
+    return v;
+}
+
+/* n points round the circle z = z0 of the unit sphere about o, counterclockwise seen from +z
+ * (the way ∇f points), their angles jittered by seed; g = ∇f there. */
+static void cap_loop(ism_sampler *s, const double o[3], size_t n, double z0, int seed,
+                     ism_fpoint *p)
 {
     double r = sqrt(1 - z0 * z0), step = 2 * M_PI / (double)n;
     for (size_t i = 0; i < n; i++) {
         double t = step * ((double)i + 0.3 * sin(1.7 * (double)(i + 1) * (seed + 1)));
-        p[i] = (ism_fpoint){{r * cos(t), r * sin(t), z0}, {0, 0, 0}, 0};
-        ism_sample_grad(s, p[i].p, p[i].g);
+        p[i] = on_sphere(s, o, r, t, z0);
     }
 }
 
@@ -40,15 +71,15 @@ static void reverse(ism_fpoint *p, size_t n)
     }
 }
 
-/* Every triangle of o faces out of the sphere (its normal toward its centroid). */
-static void all_face_out(const ism_cell_out *o, const char *what)
+/* Every triangle of o faces out of the sphere about c (its normal toward its centroid). */
+static void all_face_out(const ism_cell_out *o, const double c[3], const char *what)
 {
     for (size_t t = 0; t < o->ntris; t++) {
         const double *a = o->verts[o->tris[3 * t]].p, *b = o->verts[o->tris[3 * t + 1]].p,
-                     *c = o->verts[o->tris[3 * t + 2]].p;
+                     *e = o->verts[o->tris[3 * t + 2]].p;
         double e1[3], e2[3], nrm[3], m[3];
         for (int k = 0; k < 3; k++)
-            e1[k] = b[k] - a[k], e2[k] = c[k] - a[k], m[k] = a[k] + b[k] + c[k];
+            e1[k] = b[k] - a[k], e2[k] = e[k] - a[k], m[k] = a[k] + b[k] + e[k] - 3 * c[k];
         ism_cross3(e1, e2, nrm);
         cr_assert(ism_dot3(nrm, m) > 0, "%s: triangle %zu turned over", what, t);
     }
@@ -76,17 +107,15 @@ static void out_free(ism_cell_out *o)
 
 Test(triangulate_loop, loops_past_the_stack_as_wound)
 {
-    ism_sampler s;
-    ism_tape *tape = pf_build_sampler(&pf_unit_sphere, &s);
-    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
     enum { N = 40 };
     ism_fpoint p[N];
     for (int which = -1; which <= 1; which++) {
-        double node[6];
-        pf_sweep_box(base, 5, which, node);
+        ism_sampler s;
+        double node[6], o[3];
+        ism_tape *tape = placed_sphere(which, node, o, &s);
         for (int turned = 0; turned < 2; turned++)
             for (int corner = 0; corner < 2; corner++) {
-                cap_loop(&s, N, 0.6, which + 1, p);
+                cap_loop(&s, o, N, 0.6, which + 1, p);
                 if (turned)
                     reverse(p, N);
                 double bound = corner ? 1.0 : 0; /* 1: any corner fan passes; 0: the centre */
@@ -100,15 +129,14 @@ Test(triangulate_loop, loops_past_the_stack_as_wound)
                 cr_assert_eq(a.ntris, corner ? N - 2 : N, "%s: %zu triangles", what, a.ntris);
                 cr_assert_eq(a.nverts, corner ? N : N + 1, "%s", what);
                 if (!corner) /* the centre, projected onto the sphere */
-                    cr_assert_float_eq(ism_norm3(a.verts[N].p), 1, 1e-9, "%s", what);
-                all_face_out(&a, what);
+                    cr_assert_float_eq(ism_dist3(a.verts[N].p, o), 1, 1e-9, "%s", what);
+                all_face_out(&a, o, what);
                 same_out(&a, &b, what);
                 out_free(&a);
                 out_free(&b);
             }
+        sphere_free(&s, tape);
     }
-    ism_eval_ws_free(s.ws);
-    ism_tape_free(tape);
 }
 
 /* The largest ism_sample_dist_between over the fan of the emitted polygon q[0..n) from
@@ -143,19 +171,17 @@ static double scalar_fan_error(ism_sampler *s, const ism_fpoint *q, size_t n, si
 
 Test(triangulate_loop, corner_fan_bound_over_batches)
 {
-    ism_sampler s;
-    ism_tape *tape = pf_build_sampler(&pf_unit_sphere, &s);
-    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
     const size_t sizes[] = {11, 12, 13, 14, 40};
     ism_fpoint p[40];
     size_t later_batch = 0, cases = 0;
     for (int which = -1; which <= 1; which++) {
-        double node[6];
-        pf_sweep_box(base, 5, which, node);
+        ism_sampler s;
+        double node[6], o[3];
+        ism_tape *tape = placed_sphere(which, node, o, &s);
         for (size_t z = 0; z < sizeof sizes / sizeof *sizes; z++)
             for (int seed = 0; seed < 6; seed++) {
                 size_t n = sizes[z];
-                cap_loop(&s, n, 0.8 - 0.05 * seed, seed, p);
+                cap_loop(&s, o, n, 0.8 - 0.05 * seed, seed, p);
                 char what[64];
                 snprintf(what, sizeof what, "box %d n %zu seed %d", which, n, seed);
                 /* the fan's corner: best_corner's, whatever the bound */
@@ -176,17 +202,16 @@ Test(triangulate_loop, corner_fan_bound_over_batches)
                 cr_assert_eq(below.ntris, n, "%s: refused at %.17g, %zu triangles", what,
                              nextafter(e, 0), below.ntris);
                 cr_assert_eq(below.nverts, n + 1, "%s", what);
-                all_face_out(&loose, what);
-                all_face_out(&below, what);
+                all_face_out(&loose, o, what);
+                all_face_out(&below, o, what);
                 out_free(&loose);
                 out_free(&at);
                 out_free(&below);
             }
+        sphere_free(&s, tape);
     }
     /* the test reaches the second batch's reads: some fans are worst there */
     cr_assert(later_batch > 0 && later_batch < cases, "%zu of %zu", later_batch, cases);
-    ism_eval_ws_free(s.ws);
-    ism_tape_free(tape);
 }
 
 /* The smallest angle of triangle a, b, c in radians (acos of each corner's cosine: another
@@ -206,13 +231,14 @@ static double smallest_angle(const double *a, const double *b, const double *c)
     return least;
 }
 
-/* Does triangle a, b, c of points on the unit sphere face inward (its normal against the
- * sum of its corners, which are the unit gradients there)? */
-static bool turned_on_sphere(const double *a, const double *b, const double *c)
+/* Does triangle a, b, e of points on the unit sphere about c face inward (its normal against
+ * the sum of its corners' moves off c, which are the unit gradients there)? */
+static bool turned_on_sphere(const double *a, const double *b, const double *e,
+                             const double c[3])
 {
     double e1[3], e2[3], nrm[3], m[3];
     for (int k = 0; k < 3; k++)
-        e1[k] = b[k] - a[k], e2[k] = c[k] - a[k], m[k] = a[k] + b[k] + c[k];
+        e1[k] = b[k] - a[k], e2[k] = e[k] - a[k], m[k] = a[k] + b[k] + e[k] - 3 * c[k];
     ism_cross3(e1, e2, nrm);
     return ism_dot3(nrm, m) < 0;
 }
@@ -222,8 +248,10 @@ static bool turned_on_sphere(const double *a, const double *b, const double *c)
  * q[j + 1] and q[j - 1]), which measures the same in both, so fans whose worst is that ear
  * tie (within 1e-12 here, where acos meets the corners in another order). *margin: how much
  * worse the best fan outside the tie is (near-ties of different triangles are not asked). A
- * fan with a triangle turned over is worse than any without (triangulate.c's fan_folds). */
-static size_t best_fan_by_hand(const ism_fpoint *q, size_t n, double *margin)
+ * fan with a triangle turned over is worse than any without (triangulate.c's fan_folds);
+ * the points are on the unit sphere about centre. */
+static size_t best_fan_by_hand(const ism_fpoint *q, size_t n, const double centre[3],
+                               double *margin)
 {
     double worst[16], best_a = -100, second = -100;
     for (size_t c = 0; c < n; c++) {
@@ -232,7 +260,7 @@ static size_t best_fan_by_hand(const ism_fpoint *q, size_t n, double *margin)
         for (size_t i = 1; i + 1 < n; i++) {
             const double *a = q[c].p, *b = q[(c + i) % n].p, *e = q[(c + i + 1) % n].p;
             worst[c] = fmin(worst[c], smallest_angle(a, b, e));
-            folds = folds || turned_on_sphere(a, b, e);
+            folds = folds || turned_on_sphere(a, b, e, centre);
         }
         worst[c] -= folds ? 10 : 0; /* a fan turning a triangle over only when all do */
         best_a = fmax(best_a, worst[c]);
@@ -249,14 +277,12 @@ static size_t best_fan_by_hand(const ism_fpoint *q, size_t n, double *margin)
 
 Test(triangulate_loop, corner_fan_from_the_best_corner)
 {
-    ism_sampler s;
-    ism_tape *tape = pf_build_sampler(&pf_unit_sphere, &s);
-    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
     ism_fpoint p[16];
     size_t cases = 0, not_ear_only = 0;
     for (int which = -1; which <= 1; which++) {
-        double node[6];
-        pf_sweep_box(base, 5, which, node);
+        ism_sampler s;
+        double node[6], ctr[3];
+        ism_tape *tape = placed_sphere(which, node, ctr, &s);
         for (size_t n = 5; n <= 16; n++)
             for (int seed = 0; seed < 12; seed++) {
                 /* jittered angles and heights on the sphere (points on one circle would
@@ -265,13 +291,11 @@ Test(triangulate_loop, corner_fan_from_the_best_corner)
                 for (size_t i = 0; i < n; i++) {
                     double t = step * ((double)i + 0.45 * sin(2.3 * (double)(i + 1) * (seed + 1) +
                                                               0.7 * (double)n));
-                    double z = 0.6 + 0.08 * cos(1.9 * (double)(i + 2) * (seed + 1)),
-                           r = sqrt(1 - z * z);
-                    p[i] = (ism_fpoint){{r * cos(t), r * sin(t), z}, {0, 0, 0}, 0};
-                    ism_sample_grad(&s, p[i].p, p[i].g);
+                    double z = 0.6 + 0.08 * cos(1.9 * (double)(i + 2) * (seed + 1));
+                    p[i] = on_sphere(&s, ctr, sqrt(1 - z * z), t, z);
                 }
                 double margin;
-                size_t want = best_fan_by_hand(p, n, &margin);
+                size_t want = best_fan_by_hand(p, n, ctr, &margin);
                 if (!(margin > 1e-9))
                     continue;
                 ism_cell_out o = {0};
@@ -295,9 +319,8 @@ Test(triangulate_loop, corner_fan_from_the_best_corner)
                 cases++;
                 out_free(&o);
             }
+        sphere_free(&s, tape);
     }
     cr_assert(cases > 200, "%zu cases", cases);
     cr_assert(not_ear_only > 0, "no winner's fan is worst inside (%zu cases)", cases);
-    ism_eval_ws_free(s.ws);
-    ism_tape_free(tape);
 }
