@@ -7,6 +7,7 @@
 #include "core/singular/conform_internal.h"
 #include "core/util/vec3.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
@@ -69,7 +70,8 @@ static void clip_into(cf_polyline *pl, size_t c, const int ijk[3], const double 
     double *b = pl->g_box[pl->g_start[c]];
     for (int k = 0; k < 3; k++) {
         double clo = ijk[k] == 0 ? -INFINITY : pl->lo[k] + ijk[k] * pl->step - pad;
-        double chi = ijk[k] == pl->dim[k] - 1 ? INFINITY : pl->lo[k] + (ijk[k] + 1) * pl->step + pad;
+        double chi =
+            ijk[k] == pl->dim[k] - 1 ? INFINITY : pl->lo[k] + (ijk[k] + 1) * pl->step + pad;
         b[k] = fmin(b[k], fmax(lo[k], clo));
         b[3 + k] = fmax(b[3 + k], fmin(hi[k], chi));
     }
@@ -346,13 +348,13 @@ typedef struct {
 } near_hit;
 
 /* The segments filed in cell c measured against best (a squared distance; returned lowered
- * to the nearest found), r its near_bound. Each run of EST_RUN is read the nearest midpoint
- * first (arg_first), then of the others only those the ball test (seg_beyond) passes and whose
- * bound (seg_low2) is below best: any other is no nearer. With hit NULL (the distance alone)
- * only a nearer one is taken. With hit, one whose bound equals best is measured too, an equal
- * one is taken when it comes earlier in the run than the one held from this run (measured
- * first only for its midpoint), and *hit names the nearest: the first of equals in the cell's
- * order, as reading every segment in order with `<` would keep. */
+ * to the nearest found), r its near_bound, *hit naming the nearest. Each run of EST_RUN is
+ * read the nearest midpoint first (arg_first), then of the others only those the ball test
+ * (seg_beyond) passes and whose bound (seg_low2) is at most best: any other is farther. An
+ * equal one is taken when it comes earlier in the run than the one held from this run
+ * (measured first only for its midpoint), so *hit names the first of equals in the cell's
+ * order, as reading every segment in order with `<` would keep. (The distance alone,
+ * which needs no order, reads a cell by cell_min2.) */
 static inline __attribute__((always_inline)) double cell_runs(const cf_polyline *pl, size_t c,
                                                             const double q[3], double mag,
                                                             double best, double r,
@@ -365,23 +367,18 @@ static inline __attribute__((always_inline)) double cell_runs(const cf_polyline 
         uint32_t arg = mid_nearest(pl, sg, n, q, d2), held = EST_RUN;
         for (uint32_t o = 0; o < n; o++) {
             uint32_t m = arg_first(o, arg);
-            if (seg_beyond(pl, sg[m], d2[m], r))
+            if (seg_beyond(pl, sg[m], d2[m], r) || !(seg_low2(pl, sg[m], q, mag) <= best))
                 continue; /* farther than best */
-            double low = seg_low2(pl, sg[m], q, mag);
-            if (hit ? !(low <= best) : !(low < best))
-                continue; /* farther than best (with hit), no nearer (without) */
             double t = 0, f[3] = {0, 0, 0};
-            double e = seg_dist2(pl, sg[m], q, hit ? &t : NULL, hit ? f : NULL);
-            if (e < best || (hit && e == best && m < held && held < EST_RUN)) {
+            double e = seg_dist2(pl, sg[m], q, &t, f);
+            if (e < best || (e == best && m < held && held < EST_RUN)) {
                 best = e;
                 r = near_bound(best, mag);
-                if (hit) {
-                    held = m;
-                    hit->sg = sg[m];
-                    hit->t = t;
-                    for (int u = 0; u < 3; u++)
-                        hit->f[u] = f[u];
-                }
+                held = m;
+                hit->sg = sg[m];
+                hit->t = t;
+                for (int u = 0; u < 3; u++)
+                    hit->f[u] = f[u];
             }
         }
     }
@@ -393,7 +390,12 @@ static inline __attribute__((always_inline)) double cell_runs(const cf_polyline 
  * ulps, which the factor exceeds a million times over. */
 static inline double reach_bound(double within)
 {
-    return within > 0 && within < INFINITY ? within * within * (1 + CF_QUERY_SLACK) : INFINITY;
+    /* at least DBL_MIN: below a reach of about 1.5e-154 the square underflows (to 0, which
+     * would answer INFINITY even on the curve); a larger bound only reads more, the callers'
+     * last test (sqrt(best) <= within) still decides */
+    return within > 0 && within < INFINITY
+               ? cf_max2(within * within * (1 + CF_QUERY_SLACK), DBL_MIN)
+               : INFINITY;
 }
 
 /* The nearest point of the segments filed in the cells within `within` of q (INFINITY when
@@ -439,16 +441,17 @@ static double nearest_within(const cf_polyline *pl, const double q[3], double wi
     return best <= within ? best : INFINITY;
 }
 
-/* The smallest squared distance to the segments filed in cell (i, j, k), below best (always
- * finite here: nearest_distance starts from its reach's bound). Inlined with the distance:
- * the ring search reads a dozen cells per query, most of them empty (crossing-spheres'
- * tube: 178k calls, callgrind). Ties need no order (the distance alone is asked), so the
- * cell's entries are read by blocks (CF_SEG_BLOCK): one beyond the bound by its box is
- * skipped whole; the others are read as cell_runs reads a run, the nearest midpoint first
- * (in the cell's order best came down slowly, a segment measured at each step along the
- * curve), each segment past the ball test (seg_beyond) and the estimate (seg_low2). Reading
- * every midpoint of the cell (cell_runs) cost the Klein bottle at E 0.00327 about 1,800
- * instructions a query (66 midpoints: its cells hold about 24 segments). */
+/* The smallest squared distance to the segments filed in cell (i, j, k), below best (finite
+ * for a finite positive reach: nearest_distance starts from its reach's bound). Inlined
+ * with the distance: the ring search reads a dozen cells per query, most of them empty
+ * (crossing-spheres' tube: 178k calls, callgrind). Ties need no order (the distance alone
+ * is asked), so the cell's entries are read by blocks (CF_SEG_BLOCK): one beyond the bound
+ * by its box is skipped whole; the others are read as cell_runs reads a run, the nearest
+ * midpoint first (in the cell's order best came down slowly, a segment measured at each
+ * step along the curve), each segment past the ball test (seg_beyond) and the estimate
+ * (seg_low2). Reading every midpoint of the cell (cell_runs) cost the Klein bottle at
+ * E 0.00327 about 1,800 instructions a query (66 midpoints: its cells hold about 24
+ * segments). */
 static inline __attribute__((always_inline)) double cell_min2(const cf_polyline *pl, int i,
                                                             int j, int k, const double q[3],
                                                             double best, double mag)

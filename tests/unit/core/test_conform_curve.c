@@ -258,8 +258,9 @@ Test(conform_curve, exact_ties_first_segment)
  * of CF_SEG_BLOCK segments by their boxes) at the reach's very edge: with the reach set to the
  * distance the foot search finds (d, unbounded), it must answer d bit for bit; one ulp below,
  * INFINITY. The foot search, which starts from the same bound, likewise, with the very foot
- * and parameter it found unbounded. A walk of about 400 segments in cells of about 30 (the tube's Klein bottle fills
- * its cells with about 24), queried near it and off it, in the three placements. */
+ * and parameter it found unbounded. A walk of about 400 segments in cells of about 30 (the
+ * tube's Klein bottle fills its cells with about 24), queried near it and off it, in the
+ * three placements. */
 Test(conform_curve, distance_alone_at_the_reach)
 {
     static double p[3 * NPTS], moved[3 * NPTS];
@@ -391,5 +392,49 @@ Test(conform_curve, far_by_corners)
         }
         cr_assert(far > NTRI / 4 && far < 3 * NTRI, "shift %d: %d points called far", sh, far);
         cr_assert(straddles > 20, "shift %d: %d straddling points", sh, straddles);
+    }
+}
+
+/* Reaches so small that their square underflows (below about 1.5e-154): a query at one of the
+ * polyline's own points is at distance 0, within any reach, and must be answered 0 with the
+ * point itself as its foot, by the distance alone and by the foot search; a query off the
+ * curve, INFINITY. The walk of distance_alone_at_the_reach, in the three placements. */
+Test(conform_curve, tiny_reach_on_the_curve)
+{
+    static double p[3 * NPTS], moved[3 * NPTS];
+    srand(31);
+    p[0] = p[1] = p[2] = 0;
+    for (int i = 1; i < NPTS; i++)
+        for (int k = 0; k < 3; k++)
+            p[3 * i + k] = p[3 * (i - 1) + k] + 0.02 * (urand() - 0.5);
+    const double step = 0.04, tiny[] = {1e-160, 1e-170, 1e-200, 1e-300, 0x1p-1074};
+    const double shift[3][3] = {{0, 0, 0},
+                                {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
+                                {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
+    for (int sh = 0; sh < 3; sh++) {
+        for (size_t i = 0; i < NPTS; i++)
+            for (int k = 0; k < 3; k++)
+                moved[3 * i + k] = p[3 * i + k] + shift[sh][k];
+        cf_polyline pl;
+        cr_assert(cf_polyline_init(&pl, moved, NPTS, false, step));
+        for (size_t j = 0; j + 1 < NPTS; j += 7) { /* a segment's first point: its foot */
+            const double *q = moved + 3 * j;
+            for (size_t w = 0; w < sizeof tiny / sizeof *tiny; w++) {
+                double s, foot[3];
+                double d = cf_polyline_nearest(&pl, q, tiny[w], NULL, NULL);
+                double d2 = cf_polyline_nearest(&pl, q, tiny[w], &s, foot);
+                cr_assert(d == 0 && d2 == 0, "placement %d point %zu reach %g: %g and %g", sh, j,
+                          tiny[w], d, d2);
+                for (int k = 0; k < 3; k++)
+                    cr_assert(foot[k] == q[k], "placement %d point %zu: foot off the point", sh,
+                              j);
+                cr_assert(fabs(s - pl.s[j]) <= 1e-12, "placement %d point %zu: parameter %.17g, "
+                          "the point's %.17g", sh, j, s, pl.s[j]);
+                double off[3] = {q[0] + 1e-3, q[1] - 1e-3, q[2] + 1e-3};
+                cr_assert(isinf(cf_polyline_nearest(&pl, off, tiny[w], NULL, NULL)) &&
+                          isinf(cf_polyline_nearest(&pl, off, tiny[w], &s, foot)));
+            }
+        }
+        cf_polyline_free(&pl);
     }
 }
