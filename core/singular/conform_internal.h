@@ -530,6 +530,17 @@ bool cf_conform_curves(cf_run *r, const size_t *idx, size_t n);
 bool cf_far_by_corners(const double q[3], const double *const corner[3], const double vd[3],
                        double r, double reach);
 
+/* The tube's selection alone (conform_tube.c), as its tests ask it. A tube of radius r round
+ * the npl polylines pl, judging edges up to reach long by their corners' distances (NULL
+ * when out of memory); its radius set as the cut's widening sets it, the memo's distances
+ * kept from the first radius on (false when out of memory); whether it takes triangle t of
+ * c's mesh (some point of it within r of a curve). */
+typedef struct cf_tube cf_tube;
+cf_tube *cf_tube_new(const cf_polyline *pl, size_t npl, double r, double reach);
+bool cf_tube_radius(cf_ctx *c, cf_tube *tb, double r);
+bool cf_tube_selects(const cf_ctx *c, cf_tube *tb, uint32_t t);
+void cf_tube_free(cf_tube *tb);
+
 /* ---- conform_kept.c: curves the polygoniser's mesh already follows ---- */
 /* True when the live mesh holds each of the n open polylines pl (of curves cu, no end at a
  * pinch point) as a chain of edges from its first point to its last, each edge with two

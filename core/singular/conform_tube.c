@@ -17,7 +17,7 @@
 /* Curve segments are gathered in runs at most this many tube radii across. */
 #define CHUNK_RHO 2.0
 
-typedef struct tube {
+typedef struct cf_tube {
     const cf_polyline *pl;
     size_t n;
     double r;
@@ -27,6 +27,20 @@ typedef struct tube {
                             the reach changed) */
     uint32_t gen_base;   /* the memo's generation at the group's first radius */
 } tube;
+
+/* A tube of radius r and reach round the n polylines pl: their points' box, no memo yet. */
+static tube tube_make(const cf_polyline *pl, size_t n, double r, double reach)
+{
+    tube tb = {pl, n, r, {INFINITY, INFINITY, INFINITY}, {-INFINITY, -INFINITY, -INFINITY},
+               reach, 0, 0};
+    for (size_t k = 0; k < n; k++)
+        for (size_t i = 0; i < pl[k].n; i++)
+            for (int j = 0; j < 3; j++) {
+                tb.lo[j] = fmin(tb.lo[j], pl[k].p[3 * i + j]);
+                tb.hi[j] = fmax(tb.hi[j], pl[k].p[3 * i + j]);
+            }
+    return tb;
+}
 
 /* Vertex v's distance to the nearest of the group's curves, asked of the polylines and
  * memoised (vertex_distance). */
@@ -57,10 +71,7 @@ static __attribute__((noinline)) double vertex_query(const cf_ctx *c, const tube
     return d;
 }
 
-/* Vertex v's distance to the nearest of the group's curves (INFINITY beyond r + reach) and
- * that curve, memoised in the context for the current radius. Inline but for the query: the
- * cut asks it for every corner of every candidate, most answered by the memo (Klein bottle
- * at E 0.00327: 288K calls, 35K queries). */
+/* Whether the memo holds vertex v's distance for the tube's radius. */
 static inline bool memo_holds(const cf_ctx *c, const tube *tb, uint32_t v)
 {
     /* a distance found at a smaller radius of the same group stands: it is the distance to
@@ -69,6 +80,9 @@ static inline bool memo_holds(const cf_ctx *c, const tube *tb, uint32_t v)
     return c->memo_gen[v] == c->gen || (c->memo_gen[v] >= tb->gen_base && isfinite(c->memo_d[v]));
 }
 
+/* Vertex v's distance to the nearest of the group's curves (INFINITY beyond r + reach) and
+ * that curve, memoised in the context for the current radius. Inline but for the query: the
+ * callers ask only the corners they need, most answered by the memo. */
 static inline double vertex_distance(const cf_ctx *c, const tube *tb, uint32_t v,
                                      uint32_t *curve)
 {
@@ -179,9 +193,11 @@ static bool gather_runs(cf_ctx *c, const cf_polyline *pl, size_t n, double r, cf
     return true;
 }
 
-static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
+/* The memo made current for the tube's radius: at a new radius a new generation (the
+ * group's first: gen_base), the distances found at smaller ones kept (memo_holds). False
+ * when out of memory. */
+static bool tube_memo_current(cf_ctx *c, tube *tb)
 {
-    tube *tb = arg;
     if (tb->vd_r != tb->r) { /* a new radius: the memoised distances are stale */
         if (!cf_memo_reset(c))
             return false;
@@ -189,6 +205,14 @@ static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
             tb->gen_base = c->gen;
         tb->vd_r = tb->r;
     }
+    return true;
+}
+
+static bool gather_tube(cf_ctx *c, void *arg, cf_tris *out)
+{
+    tube *tb = arg;
+    if (!tube_memo_current(c, tb))
+        return false;
     /* the curves' box grown by r holds every run's query box: one pass over the mesh files
      * what the runs need, and (ahead by r) what the next widenings need */
     double lo[3], hi[3];
@@ -365,14 +389,7 @@ static bool conform_group(cf_run *r, const size_t *idx, size_t n)
     /* the tube's radius and reach from the longest edge near the curves, measured with a
      * reach of r0 (the finest cells' edges are shorter) */
     double r0 = CF_RHO_CELLS * c->cell, longest = 0;
-    tube tb = {g.pl, g.n, r0, {INFINITY, INFINITY, INFINITY},
-               {-INFINITY, -INFINITY, -INFINITY}, r0, 0, 0};
-    for (size_t k = 0; k < g.n; k++)
-        for (size_t i = 0; i < g.npts[k]; i++)
-            for (int j = 0; j < 3; j++) {
-                tb.lo[j] = fmin(tb.lo[j], g.pts[k][3 * i + j]);
-                tb.hi[j] = fmax(tb.hi[j], g.pts[k][3 * i + j]);
-            }
+    tube tb = tube_make(g.pl, g.n, r0, r0);
     if (!longest_edge_near_curves(c, &tb, &longest) || c->stopped) {
         group_free(&g);
         return c->stopped; /* stopped: nothing cut yet */
@@ -403,7 +420,8 @@ static bool conform_group(cf_run *r, const size_t *idx, size_t n)
     } else if (ok) {
         for (size_t k = 0; k < g.n; k++)
             for (size_t i = 0; ok && i < g.npts[k]; i++)
-                ok = (g.cv[k][i] = curve_point_vertex(r, g.cu[k], g.pts[k], i, g.npts[k])) != CF_NONE;
+                ok = (g.cv[k][i] = curve_point_vertex(r, g.cu[k], g.pts[k], i, g.npts[k])) !=
+                     CF_NONE;
         ok = ok && cf_zip_loops(c, g.pl, (const uint32_t *const *)g.cv, g.n, &ls, tb.r);
         if (ok && c->stopped)
             c->st->items_stopped++;
@@ -422,4 +440,28 @@ static bool conform_group(cf_run *r, const size_t *idx, size_t n)
     cf_loops_free(&ls);
     group_free(&g);
     return ok;
+}
+
+cf_tube *cf_tube_new(const cf_polyline *pl, size_t npl, double r, double reach)
+{
+    tube *tb = malloc(sizeof *tb);
+    if (tb)
+        *tb = tube_make(pl, npl, r, reach);
+    return tb;
+}
+
+bool cf_tube_radius(cf_ctx *c, cf_tube *tb, double r)
+{
+    tb->r = r;
+    return tube_memo_current(c, tb);
+}
+
+bool cf_tube_selects(const cf_ctx *c, cf_tube *tb, uint32_t t)
+{
+    return tri_in_tube(c, t, tb);
+}
+
+void cf_tube_free(cf_tube *tb)
+{
+    free(tb);
 }
