@@ -553,19 +553,18 @@ static double known_measure(cf_ctx *c, edge_memo *m, uint32_t i, const double q[
 static double edge_measure(cf_ctx *c, edge_memo *m, uint32_t a, uint32_t b, const double q[3],
                            double E, bool *ok)
 {
-    uint64_t key = ism_edge_key(a, b);
+    /* the room before the map add, as prefetch takes it: an index the map holds has its
+     * entries (added first, a later lookup of the edge would read past them) */
     bool added;
-    uint32_t i = ism_key_map_add(&m->map, key, &added);
+    uint32_t i = edge_memo_room(m, m->map.n + 1)
+                     ? ism_key_map_add(&m->map, ism_edge_key(a, b), &added)
+                     : ISM_KEY_NONE;
     if (i == ISM_KEY_NONE) {
         *ok = false;
         return measure(c, q, E, NULL, 0);
     }
     if (!added)
         return known_measure(c, m, i, q, E);
-    if (!edge_memo_room(m, (size_t)i + 1)) {
-        *ok = false;
-        return measure(c, q, E, NULL, 0);
-    }
     m->state[i] = MID_MEASURED;
     return m->d[i] = measure(c, q, E, NULL, 0);
 }
