@@ -117,22 +117,39 @@ static void check_queries(const double *p, size_t n, bool closed, double step, b
     cf_polyline_free(&pl);
 }
 
+/* The n points p moved into placement sh (tests/unit/placements.h): their own, by PF_OFF_*,
+ * or by PF_IRR_* of a step. */
+static void place(const double *p, size_t n, int sh, double step, double *moved)
+{
+    const double shift[3][3] = {{0, 0, 0},
+                                {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
+                                {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            moved[3 * i + k] = p[3 * i + k] + shift[sh][k];
+}
+
 /* check_queries in the three placements (tests/unit/placements.h): the curve moved by
  * PF_OFF_* and by PF_IRR_* of a step, where the slack of the bounds (seg_low2's, the cells'
  * sides) scales with the coordinates' magnitude. */
 static void check_placed(const double *p, size_t n, bool closed, double step, bool misses_too)
 {
     static double moved[3 * NPTS];
-    const double shift[3][3] = {{0, 0, 0},
-                                {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
-                                {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
     cr_assert(n <= NPTS);
     for (int sh = 0; sh < 3; sh++) {
-        for (size_t i = 0; i < n; i++)
-            for (int k = 0; k < 3; k++)
-                moved[3 * i + k] = p[3 * i + k] + shift[sh][k];
+        place(p, n, sh, step, moved);
         check_queries(moved, n, closed, step, misses_too);
     }
+}
+
+/* A random walk of NPTS points from the origin, steps up to 0.01 along each axis (seed). */
+static void random_walk(double *p, unsigned seed)
+{
+    srand(seed);
+    p[0] = p[1] = p[2] = 0;
+    for (int i = 1; i < NPTS; i++)
+        for (int k = 0; k < 3; k++)
+            p[3 * i + k] = p[3 * (i - 1) + k] + 0.02 * (urand() - 0.5);
 }
 
 Test(conform_curve, circle_and_helix)
@@ -264,19 +281,10 @@ Test(conform_curve, exact_ties_first_segment)
 Test(conform_curve, distance_alone_at_the_reach)
 {
     static double p[3 * NPTS], moved[3 * NPTS];
-    srand(29);
-    p[0] = p[1] = p[2] = 0;
-    for (int i = 1; i < NPTS; i++)
-        for (int k = 0; k < 3; k++)
-            p[3 * i + k] = p[3 * (i - 1) + k] + 0.02 * (urand() - 0.5);
+    random_walk(p, 29);
     const double step = 0.04;
-    const double shift[3][3] = {{0, 0, 0},
-                                {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
-                                {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
     for (int sh = 0; sh < 3; sh++) {
-        for (size_t i = 0; i < NPTS; i++)
-            for (int k = 0; k < 3; k++)
-                moved[3 * i + k] = p[3 * i + k] + shift[sh][k];
+        place(p, NPTS, sh, step, moved);
         cf_polyline pl;
         cr_assert(cf_polyline_init(&pl, moved, NPTS, false, step));
         size_t cells = (size_t)pl.dim[0] * (size_t)pl.dim[1] * (size_t)pl.dim[2], most = 0;
@@ -402,19 +410,10 @@ Test(conform_curve, far_by_corners)
 Test(conform_curve, tiny_reach_on_the_curve)
 {
     static double p[3 * NPTS], moved[3 * NPTS];
-    srand(31);
-    p[0] = p[1] = p[2] = 0;
-    for (int i = 1; i < NPTS; i++)
-        for (int k = 0; k < 3; k++)
-            p[3 * i + k] = p[3 * (i - 1) + k] + 0.02 * (urand() - 0.5);
+    random_walk(p, 31);
     const double step = 0.04, tiny[] = {1e-160, 1e-170, 1e-200, 1e-300, 0x1p-1074};
-    const double shift[3][3] = {{0, 0, 0},
-                                {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
-                                {PF_IRR_X * step, PF_IRR_Y * step, PF_IRR_Z * step}};
     for (int sh = 0; sh < 3; sh++) {
-        for (size_t i = 0; i < NPTS; i++)
-            for (int k = 0; k < 3; k++)
-                moved[3 * i + k] = p[3 * i + k] + shift[sh][k];
+        place(p, NPTS, sh, step, moved);
         cf_polyline pl;
         cr_assert(cf_polyline_init(&pl, moved, NPTS, false, step));
         for (size_t j = 0; j + 1 < NPTS; j += 7) { /* a segment's first point: its foot */
