@@ -44,13 +44,17 @@ typedef struct sbox {
     int level;
 } sbox;
 
-/* fmin(fmax(v, lo), hi) as glibc's x86-64 fmax and fmin take it (maxsd, minsd: the second
- * operand when equal, ±0 included; a NaN v gives lo), inline: the library calls cost Barth's
- * sextic at E 0.0259 2.5M instructions of its probes' 16.7M. */
+/* v when lo <= v <= hi, its own zero included (+0 against a bound -0: the Newton step's
+ * p - t g when the two are equal), else the nearer bound; a NaN v gives lo (bounds are never
+ * NaN). Bit for bit the library calls it replaces as GCC 12 compiled them: fmin(fmax(v, lo),
+ * hi) was emitted as fmin(hi, fmax(lo, v)) (C leaves the sign of their zero open, so GCC
+ * takes both as commutative), and glibc's x86-64 fmax and fmin (maxsd, minsd) give the second
+ * operand when equal. Inline: the calls cost Barth's sextic at E 0.0259 2.5M instructions of
+ * its probes' 16.7M. */
 static inline double clamp(double v, double lo, double hi)
 {
-    v = v > lo ? v : lo;
-    return v < hi ? v : hi;
+    v = v >= lo ? v : lo;
+    return v <= hi ? v : hi;
 }
 
 static bool other_sign(double f, int sign) { return sign > 0 ? f < 0 : f > 0; }
@@ -85,8 +89,10 @@ static void probe_start(probe_run *r, const ism_interval x[3])
         r->before[k] = NAN; /* equal to nothing */
         r->flat[k] = flat_along(x, k);
         double w = x[k].hi - x[k].lo;
+        /* fmin(size, w), a NaN w (NaN bounds) included; off a flat axis w != 0, so which
+         * operand wins on equality cannot change the sign of a zero */
         if (!r->flat[k])
-            r->size = r->size < w ? r->size : w; /* fmin as clamp takes it */
+            r->size = w < r->size ? w : r->size;
     }
 }
 

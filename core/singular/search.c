@@ -140,7 +140,9 @@ typedef struct worker {
     uint64_t centre_dropped; /* cells the centre test (children_quad) dropped */
     uint64_t grads_batched;  /* cells whose gradients pre_gradients took */
     uint64_t grads_batch_read; /* ... and classify read */
-    struct expansion *ex; /* a task's parents between screening and finish (expand_task) */
+    /* a task's parents between screening and finish (expand_task): SEARCH_CELLS_PER_TASK
+     * expansions of 3,352 bytes (8 pre_grad with a full ism_ivjet each), 52 KiB a worker */
+    struct expansion *ex;
 } worker;
 
 /* One task's output: surviving children (their models indexed within models) and boxes, in
