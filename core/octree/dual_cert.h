@@ -40,15 +40,16 @@ bool ism_dual_taylor(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
  * groups, interval_jet.h), then the gradients at the centres in one batch
  * (ism_eval_interval_grad_batch; its cost against one by one: interval_jet.h,
  * ISM_IVGRAD_BATCH). Counts no evaluation (the caller counts each model when it uses it, as
- * ism_dual_taylor would). False, with nothing in m or ok to use, when the
- * batch does not take t: then take the models one by one. */
+ * ism_dual_taylor would). False, with nothing in m or ok to use, where t holds a min, max or
+ * abs (the lanes tell no kinks) or the batch does not take t: then take the models one by
+ * one. */
 bool ism_dual_taylor_many(const ism_tape *t, ism_ivjet_ws *jet, const double (*lo)[3],
                           const double (*hi)[3], size_t n, ism_dual_model *m, bool *ok);
 
 /* ism_dual_taylor over lo[k]..hi[k] for k < 2 into m[k], bit for bit, ok[k] its answer:
  * the two boxes' jets and their centres' in one group of lanes (ism_eval_interval_jet_lanes;
- * on the torus ~5.3K instructions against ~4.2K for one model alone: for callers that
- * will read both, dual_cert.c's proofs on sub-boxes). Counts no evaluation. False, with
+ * dearer than one model alone, so for callers that will read both: dual_cert.c's proofs on
+ * sub-boxes, where PAIRED_OPEN's comment gives the figures). Counts no evaluation. False, with
  * nothing in m or ok to use, where t holds a min, max or abs (the lanes tell no kinks) or
  * the lanes do not take t: then take them one by one. */
 bool ism_dual_taylor_pair(const ism_tape *t, ism_ivjet_ws *jet, const double (*lo)[3],

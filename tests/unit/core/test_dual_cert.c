@@ -818,6 +818,41 @@ Test(dual_cert, models_made_in_pairs_are_the_models_made_one_by_one)
     ism_tape_free(t);
 }
 
+/* ism_dual_taylor_many on a tape with a min (the lanes tell no kinks) declines, whatever
+ * the boxes, so no model comes back with ok true over a box that holds the kink: batches of
+ * 1 to 8 boxes 0.2 across by the unit sphere, every third of them straddling its cut z = 0.3
+ * (both branches in the box: ism_dual_taylor refuses, as checked), the others below or above
+ * it (one branch: it takes them). */
+Test(dual_cert, models_at_once_declined_on_a_tape_with_a_kink)
+{
+    static const pf_surface cut = {"min(x^2 + y^2 + z^2 - 1, 0.3 - z)", NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&cut);
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t);
+    cr_assert(jw);
+    int straddling = 0;
+    for (size_t n = 1; n <= ISM_IVGRAD_BATCH; n++) {
+        double lo[ISM_IVGRAD_BATCH][3], hi[ISM_IVGRAD_BATCH][3];
+        for (size_t k = 0; k < n; k++) {
+            double z = k % 3 == 0 ? 0.2 : k % 3 == 1 ? -0.3 : 0.5; /* lo: across, below, above */
+            double c[3] = {0.85 + 0.01 * (double)k, 0.01 * (double)n - 0.1, z}; /* by r = 1 */
+            for (int a = 0; a < 3; a++)
+                lo[k][a] = c[a], hi[k][a] = c[a] + 0.2;
+            ism_dual_model one;
+            uint64_t count = 0;
+            bool ok1 = ism_dual_taylor(t, jw, lo[k], hi[k], &one, &count);
+            cr_assert_eq(ok1, k % 3 != 0, "batch %zu, box %zu: ism_dual_taylor %d", n, k, ok1);
+            straddling += k % 3 == 0;
+        }
+        ism_dual_model m[ISM_IVGRAD_BATCH];
+        bool ok[ISM_IVGRAD_BATCH];
+        cr_assert(!ism_dual_taylor_many(t, jw, (const double (*)[3])lo,
+                                        (const double (*)[3])hi, n, m, ok), "batch %zu", n);
+    }
+    cr_assert(straddling == 15, "%d", straddling);
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
+
 /* f at FORM_SAMPLES^3 points of lo..hi, corners included, all of v's sign (v one-signed):
  * v encloses f over the box, the fact empty_proven's early return rests on. */
 #define FORM_SAMPLES 5
