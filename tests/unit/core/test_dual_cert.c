@@ -7,6 +7,7 @@
  * cheapest-first order gives the plain sub-box rule's verdicts. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdio.h>
 #include <string.h>
 #include "core/eval/eval.h"
 #include "core/eval/interval_ops.h"
@@ -850,6 +851,78 @@ Test(dual_cert, models_at_once_declined_on_a_tape_with_a_kink)
     }
     cr_assert(straddling == 15, "%d", straddling);
     ism_ivjet_ws_free(jw);
+    ism_tape_free(t);
+}
+
+/* One proof (ism_dual_prove_halves) on the torus's tape t and on its tape capped as
+ * min(f, 1e300): the same verdict, sub-boxes shown free and count of interval evaluations.
+ * Over a box where f < 1e300 the cap is f to the bit, but it is a kink (ism_tape_has_kink),
+ * so ism_dual_taylor_pair declines it and its proof takes the sub-boxes' models one by one,
+ * while the torus's takes them two at once where few are left open (PAIRED_OPEN). */
+static void expect_same_proof(const ism_tape *t, ism_ivjet_ws *jw, const ism_tape *capped,
+                              ism_ivjet_ws *cw, const double lo[3], const double *mid,
+                              const double hi[3], const double *d, int halvings, int cell)
+{
+    ism_dual_model m, mc;
+    uint64_t n = 0, nc = 0;
+    cr_assert(ism_dual_taylor(t, jw, lo, hi, &m, &n) && ism_dual_taylor(capped, cw, lo, hi,
+                                                                         &mc, &nc));
+    cr_assert(memcmp(&m, &mc, sizeof m) == 0, "cell %d: the cap is not f here", cell);
+    for (int open_whole = 0; open_whole < 2; open_whole++) {
+        ism_ivgrad g;
+        if (open_whole && (d || !ism_dual_over(&m, lo, hi, &g) || ism_dual_encl_free(&g)))
+            continue; /* open_whole only where m's enclosure holds 0, for emptiness */
+        uint8_t bits = 0, cbits = 0;
+        bool v = ism_dual_prove_halves(t, jw, &m, lo, mid, hi, d, halvings, open_whole, &bits,
+                                       &n);
+        bool vc = ism_dual_prove_halves(capped, cw, &mc, lo, mid, hi, d, halvings, open_whole,
+                                        &cbits, &nc);
+        cr_expect(v == vc && bits == cbits && n == nc, "cell %d, %s, %d halvings, open %d: "
+                  "paired %d / %#x / %llu, one by one %d / %#x / %llu", cell,
+                  d ? "graph" : "free", halvings, open_whole, v, bits, (unsigned long long)n,
+                  vc, cbits, (unsigned long long)nc);
+    }
+}
+
+/* The proofs that take sub-boxes' models in pairs give what they give one by one: verdict,
+ * sub-boxes shown free and interval count (the n_interval statistics) equal on the torus and
+ * on its tape capped as min(f, 1e300) (expect_same_proof), on the tube cells (three sizes,
+ * on the lattice and moved off it by 1e-3 and by √2 − 1 of a cell), halved at the centre and
+ * at 0.3 and 0.7 of each side (a node's lattice centre in a shifted box), for emptiness and
+ * for one graph along ∇f at the centre, with 1 and 2 halvings. */
+Test(dual_cert, proofs_by_pairs_are_the_proofs_one_by_one)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    char expr[256];
+    int len = snprintf(expr, sizeof expr, "min(%s, 1e300)", pf_ring_torus.expr);
+    cr_assert(len > 0 && (size_t)len < sizeof expr);
+    pf_surface cap = pf_ring_torus;
+    cap.expr = expr;
+    ism_tape *capped = pf_compile(&cap);
+    cr_assert(ism_tape_has_kink(capped) && !ism_tape_has_kink(t));
+    ism_ivjet_ws *jw = ism_ivjet_ws_new(t), *cw = ism_ivjet_ws_new(capped);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert(jw && cw && ws);
+    for (int i = 0; i < TUBE_CELLS; i++) {
+        double lo[3], hi[3], s = tube_cell(i, lo, hi), centre[3], d[3];
+        for (int a = 0; a < 3; a++)
+            centre[a] = 0.5 * lo[a] + 0.5 * hi[a];
+        ism_eval_gradient(t, ws, centre[0], centre[1], centre[2], d);
+        for (int at = 0; at < 3; at++) {
+            double mid[3];
+            for (int a = 0; a < 3; a++)
+                mid[a] = at == 0 ? centre[a] : lo[a] + (at == 1 ? 0.3 : 0.7) * s;
+            for (int halvings = 1; halvings <= 2; halvings++) {
+                expect_same_proof(t, jw, capped, cw, lo, at ? mid : NULL, hi, NULL, halvings,
+                                  i);
+                expect_same_proof(t, jw, capped, cw, lo, at ? mid : NULL, hi, d, halvings, i);
+            }
+        }
+    }
+    ism_eval_ws_free(ws);
+    ism_ivjet_ws_free(cw);
+    ism_ivjet_ws_free(jw);
+    ism_tape_free(capped);
     ism_tape_free(t);
 }
 
