@@ -30,12 +30,6 @@ ism_tape *ism_tape_new_like(const ism_tape *t)
     return out;
 }
 
-bool ism_op_is_min_max(int op)
-{
-    return op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR
-        || op == ISM_OP_MAX_RC;
-}
-
 bool ism_tape_has_min_max(const ism_tape *t)
 {
     for (size_t i = 0; i < t->len; i++)
