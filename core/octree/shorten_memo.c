@@ -7,6 +7,7 @@
 #include "core/expr/tape.h"
 #include "core/util/grow.h"
 
+#include <assert.h>
 #include <string.h>
 
 enum { TAPE_UNKNOWN = 0, TAPE_KEYED = 1, TAPE_UNKEYED = 2 };
@@ -16,6 +17,7 @@ struct ism_shorten_memo_tape {
     uint8_t n;      /* how many */
     uint8_t state;  /* TAPE_* */
     uint32_t first; /* 1 + its first entry in m->e (0: none) */
+    uint32_t len;   /* its length (low 32 bits): the check that each call names the same tape */
 };
 
 struct ism_shorten_memo_entry {
@@ -41,6 +43,7 @@ static ism_shorten_memo_tape *slot(ism_shorten_memo *m, uint32_t id)
  * limit; false when out of memory. */
 static bool learn(ism_shorten_memo *m, ism_shorten_memo_tape *mt, const ism_tape *t)
 {
+    mt->len = (uint32_t)t->len;
     size_t n = 0;
     for (size_t i = 0; i < t->len; i++)
         n += ism_op_is_min_max(t->code[i].op);
@@ -64,7 +67,10 @@ enum ism_shorten_memo_found ism_shorten_memo_get(ism_shorten_memo *m, uint32_t i
                                                  uint64_t *key, uint32_t *to)
 {
     ism_shorten_memo_tape *mt = (size_t)id < m->tape_cap ? &m->tape[id] : slot(m, id);
-    if (!mt || (mt->state == TAPE_UNKNOWN && !learn(m, mt, t)) || mt->state != TAPE_KEYED)
+    if (!mt || (mt->state == TAPE_UNKNOWN && !learn(m, mt, t)))
+        return ISM_SHORTEN_MEMO_UNKEYED;
+    assert(mt->len == (uint32_t)t->len && "id names another tape than on its first call");
+    if (mt->state != TAPE_KEYED)
         return ISM_SHORTEN_MEMO_UNKEYED;
     uint64_t k = 0;
     const uint32_t *at = m->at + mt->at;

@@ -39,8 +39,8 @@ enum ism_shorten_memo_found {
 };
 
 /* The key of the choices choice[0, t->len) holds for tape t, number id (its min/max
- * positions found on the first call for id; t must be the same tape every time), and the
- * number that key gave below id if met (ism_shorten_memo_add). */
+ * positions found on the first call for id; t must be the same tape every time: asserted of
+ * its length), and the number that key gave below id if met (ism_shorten_memo_add). */
 enum ism_shorten_memo_found ism_shorten_memo_get(ism_shorten_memo *m, uint32_t id,
                                                  const ism_tape *t, const uint8_t *choice,
                                                  uint64_t *key, uint32_t *to);

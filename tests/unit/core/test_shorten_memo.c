@@ -6,11 +6,13 @@
  * bit; on solids with one and several min/max (keyed) and with more than the key holds, in
  * the three placements of the box. */
 #include <criterion/criterion.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "core/eval/shorten.h"
+#include "core/expr/tape.h"
 #include "core/octree/shorten_memo.h"
 #include "poly_fixture.h"
 
@@ -168,4 +170,93 @@ Test(shorten_memo, memo_names_the_fresh_shortening, .timeout = 240)
             run(keyed[i], which, 1000, true);
         run(many, which, 1000, false);
     }
+}
+
+/* f of n balls (n - 1 min), its min/max counted. */
+static ism_tape *balls_tape(int n, char *text, size_t cap)
+{
+    balls(text, cap, n);
+    ism_error err;
+    ism_tape *f = ism_tape_compile(text, NULL, 0, NULL, 0, NULL, &err);
+    cr_assert_not_null(f, "%s", err.message);
+    size_t k = 0;
+    for (size_t i = 0; i < f->len; i++)
+        k += ism_op_is_min_max(f->code[i].op);
+    cr_assert_eq(k, (size_t)n - 1, "%d balls: %zu min/max", n, k);
+    return f;
+}
+
+/* The key's limit, ISM_SHORTEN_MEMO_MAX_KINKS = 32 (two bits each in 64): a union of 33
+ * balls (32 min) is keyed, its memo's numbers those of the fresh shortenings, with hits; one
+ * of 34 balls (33 min) is not, in the three placements. */
+Test(shorten_memo, the_key_holds_32_min_max_not_33, .timeout = 240)
+{
+    cr_assert_eq(ISM_SHORTEN_MEMO_MAX_KINKS, 32);
+    static char text[8192];
+    for (int n = 33; n <= 34; n++)
+        ism_tape_free(balls_tape(n, text, sizeof text));
+    for (int which = -1; which <= 1; which++) {
+        balls(text, sizeof text, 33);
+        run(text, which, 1, true);
+        balls(text, sizeof text, 34);
+        run(text, which, 0, false);
+    }
+}
+
+/* Every one of a 32-min tape's min/max is in its key, the last (bits 62, 63) and the first
+ * alike: choices that differ at one of them alone, each of 1 and 2 against 0 and each other,
+ * are not the key met (a key of fewer min/max, or one that folds two choices, would give
+ * the number met for another shortening). */
+Test(shorten_memo, each_min_max_is_in_the_key)
+{
+    static char text[8192];
+    ism_tape *f = balls_tape(33, text, sizeof text);
+    size_t first = f->len, last = 0;
+    for (size_t i = 0; i < f->len; i++)
+        if (ism_op_is_min_max(f->code[i].op)) {
+            first = i < first ? i : first;
+            last = i;
+        }
+    uint8_t *choice = calloc(f->len, 1);
+    cr_assert_not_null(choice);
+    size_t at[2] = {first, last};
+    for (int p = 0; p < 2; p++)
+        for (uint8_t was = 0; was < 3; was++)
+            for (uint8_t now = 0; now < 3; now++) {
+                if (was == now)
+                    continue;
+                ism_shorten_memo m = {0};
+                uint64_t key, key2;
+                uint32_t to = 0;
+                choice[at[p]] = was;
+                cr_assert_eq(ism_shorten_memo_get(&m, 0, f, choice, &key, &to),
+                             ISM_SHORTEN_MEMO_MISS);
+                cr_assert(ism_shorten_memo_add(&m, 0, key, 7));
+                cr_assert_eq(ism_shorten_memo_get(&m, 0, f, choice, &key2, &to),
+                             ISM_SHORTEN_MEMO_HIT);
+                cr_assert_eq(to, 7u);
+                choice[at[p]] = now;
+                cr_assert_eq(ism_shorten_memo_get(&m, 0, f, choice, &key2, &to),
+                             ISM_SHORTEN_MEMO_MISS, "min/max %zu: choice %u met as %u", at[p],
+                             now, was);
+                choice[at[p]] = 0;
+                ism_shorten_memo_free(&m);
+            }
+    free(choice);
+    ism_tape_free(f);
+}
+
+/* A number is one tape: asking the memo with another tape (here of another length) under a
+ * number it has learnt is a caller's bug, caught by the assert. */
+Test(shorten_memo, another_tape_under_a_number_aborts, .signal = SIGABRT)
+{
+    static char text[8192];
+    ism_tape *a = balls_tape(3, text, sizeof text), *b = balls_tape(4, text, sizeof text);
+    uint8_t choice[256] = {0};
+    cr_assert_lt(b->len, sizeof choice);
+    ism_shorten_memo m = {0};
+    uint64_t key;
+    uint32_t to;
+    cr_assert_eq(ism_shorten_memo_get(&m, 0, a, choice, &key, &to), ISM_SHORTEN_MEMO_MISS);
+    ism_shorten_memo_get(&m, 0, b, choice, &key, &to); /* aborts */
 }
