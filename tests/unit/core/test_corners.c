@@ -8,6 +8,7 @@
 #include <math.h>
 #include <stdbool.h>
 #include "core/octree/corners.h"
+#include "corner_signs.h"
 
 Test(corners, cube_edges_join_neighbours_on_their_faces)
 {
@@ -67,39 +68,9 @@ Test(corners, edge_masks_are_the_table_read_edge_by_edge)
     }
 }
 
-/* ism_corner_sign_masks against C's < 0 and == 0 corner by corner, and ism_single_root_edges
- * against its rule (crossed by the sign change, touching no zero corner), on 8 corners drawn
- * from values whose signs are easy to get wrong lane by lane: ±0, NaN, ±inf, the least
- * subnormals, ±1; every corner position takes every value (an LCG picks the others). */
+/* ism_corner_sign_masks and ism_single_root_edges against the compares (corner_signs.h);
+ * the scalar branch: test_corners_scalar.c. */
 Test(corners, sign_masks_are_the_compares_corner_by_corner)
 {
-    const double vals[] = {0.0, -0.0, NAN, -NAN, INFINITY, -INFINITY, 0x1p-1074, -0x1p-1074,
-                           1.0, -1.0};
-    const int nv = (int)(sizeof vals / sizeof vals[0]);
-    unsigned long long s = 31;
-    for (int round = 0; round < 4000; round++) {
-        double f[8];
-        for (int c = 0; c < 8; c++) {
-            s = s * 6364136223846793005ull + 1442695040888963407ull;
-            f[c] = vals[(s >> 33) % (unsigned long long)nv];
-        }
-        f[round % 8] = vals[round / 8 % nv]; /* every value at every corner */
-        unsigned neg, zero, want_neg = 0, want_zero = 0;
-        for (int c = 0; c < 8; c++) {
-            want_neg |= (unsigned)(f[c] < 0) << c;
-            want_zero |= (unsigned)(f[c] == 0) << c;
-        }
-        ism_corner_sign_masks(f, &neg, &zero);
-        cr_assert_eq(neg, want_neg, "round %d: neg %#x, want %#x", round, neg, want_neg);
-        cr_assert_eq(zero, want_zero, "round %d: zero %#x, want %#x", round, zero, want_zero);
-        unsigned single = 0;
-        for (int e = 0; e < 12; e++) {
-            int c0, c1, faces[2];
-            ism_cube_edge(e, &c0, &c1, faces);
-            bool crossed = (f[c0] < 0) != (f[c1] < 0);
-            bool on_zero = f[c0] == 0 || f[c1] == 0;
-            single |= (unsigned)(crossed && !on_zero) << e;
-        }
-        cr_assert_eq(ism_single_root_edges(f), single, "round %d", round);
-    }
+    check_sign_masks();
 }
