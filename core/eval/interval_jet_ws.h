@@ -1,8 +1,9 @@
 /* interval_jet_ws.h — the interval jets' workspace (interval_jet.h's ism_ivjet_ws), shared by
- * the box-by-box evaluator (eval_interval_jet.c) and the batched gradient pass
- * (eval_interval_grad_batch.c): their registers, and the records of gradient passes that a
- * following jet over the same box takes its values and first partials from (then computing
- * only the Hessian). Internal to core/eval. */
+ * the box-by-box evaluator (eval_interval_jet.c), the batched gradient pass
+ * (eval_interval_grad_batch.c) and the batched jets (eval_interval_jet_lanes.c): their
+ * registers, and the records of gradient passes that a following jet over the same box
+ * takes its values and first partials from (then computing only the Hessian). Internal to
+ * core/eval. */
 #ifndef ISM_INTERVAL_JET_WS_H
 #define ISM_INTERVAL_JET_WS_H
 
