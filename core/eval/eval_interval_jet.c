@@ -16,10 +16,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-/* The (i, j) index pairs of the six Hessian entries (interval_jet_ws.h). */
-#define HI ism_ivjet_hi
-#define HJ ism_ivjet_hj
-
 ism_ivjet_ws *ism_ivjet_ws_new(const ism_tape *t)
 {
     if (!t)
@@ -76,20 +72,18 @@ static ism_interval ivc(double c) { return iv(c, c); }
  * heart's interval gradients 85.8M -> 80.9M instructions in bench_singular. */
 #define ALWAYS_INLINE inline __attribute__((always_inline))
 
-/* What one instruction computes, as bits (interval_jet_ws.h's ISM_IVJ_*): D(k) the partial
- * in variable k, H(e) the Hessian entry e, SECOND whether Hessian entries are kept at all
- * (without it they are left untouched: unused). A first partial outside the bits is one in
- * a variable the instruction's value does not depend on (the tape's free_of): the rules
- * below make it exactly 0 (every exact 0 stays one, see is_zero), so it is written as 0
- * without work and the results are bit for bit those of computing it. Second partials
- * likewise, but only for values no kink feeds (the tape's smooth; ism_ivjet_want). On the
- * heart's tape 8 of 14 instructions depend on fewer than three variables. */
-#define D(k) ISM_IVJ_D(k)
-#define H(e) ISM_IVJ_H(e)
-#define SECOND ISM_IVJ_SECOND
-#define DO_D(w, k) (((w) & D(k)) != 0)
-#define DO_H(w, e) (((w) & H(e)) != 0)
-#define want_of ism_ivjet_want
+/* What one instruction computes, as bits w (interval_jet_ws.h's ISM_IVJ_*, made by
+ * ism_ivjet_want): do_d(w, k) the partial in variable k, do_h(w, e) the Hessian entry e,
+ * keeps_hess(w) whether Hessian entries are kept at all (without it they are left
+ * untouched: unused). A first partial outside the bits is one in a variable the
+ * instruction's value does not depend on (the tape's free_of): the rules below make it
+ * exactly 0 (every exact 0 stays one, see is_zero), so it is written as 0 without work
+ * and the results are bit for bit those of computing it. Second partials likewise, but
+ * only for values no kink feeds (the tape's smooth; ism_ivjet_want). On the heart's tape
+ * 8 of 14 instructions depend on fewer than three variables. */
+static ALWAYS_INLINE bool do_d(unsigned w, int k) { return (w & ISM_IVJ_D(k)) != 0; }
+static ALWAYS_INLINE bool do_h(unsigned w, int e) { return (w & ISM_IVJ_H(e)) != 0; }
+static ALWAYS_INLINE bool keeps_hess(unsigned w) { return (w & ISM_IVJ_SECOND) != 0; }
 
 /* Exact zeros stay exact (outward rounding would widen 0 to ±2^-1074): a derivative that is
  * exactly 0 says the register does not depend on that variable, which the kink rule uses. */
@@ -123,13 +117,13 @@ static void set_whole_derivs(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *
 {
     bool flat[3];
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
-        flat[k] = !DO_D(w, k) || (is_zero(a->d[k]) && is_zero(b->d[k]));
+        flat[k] = !do_d(w, k) || (is_zero(a->d[k]) && is_zero(b->d[k]));
         o->d[k] = flat[k] ? ivc(0.0) : ism_iv_whole();
     }
-    if (w & SECOND) {
+    if (keeps_hess(w)) {
         _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
-            bool zero = !DO_H(w, e) || (flat[HI[e]] && flat[HJ[e]] && is_zero(a->h[e])
-                                        && is_zero(b->h[e]));
+            bool zero = !do_h(w, e) || (flat[ism_ivjet_hi[e]] && flat[ism_ivjet_hj[e]]
+                                        && is_zero(a->h[e]) && is_zero(b->h[e]));
             o->h[e] = zero ? ivc(0.0) : ism_iv_whole();
         }
     }
@@ -139,7 +133,7 @@ static ALWAYS_INLINE void set_zero_derivs(ism_ivjet *o, unsigned w)
 {
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         o->d[k] = ivc(0.0);
-    if (w & SECOND) {
+    if (keeps_hess(w)) {
         _Pragma("GCC unroll 6") for (int k = 0; k < 6; k++)
             o->h[k] = ivc(0.0);
     }
@@ -148,7 +142,7 @@ static ALWAYS_INLINE void set_zero_derivs(ism_ivjet *o, unsigned w)
 /* u'_i u'_j, the square when i = j (tighter: never negative). */
 static ALWAYS_INLINE ism_interval dd(const ism_ivjet *a, int e)
 {
-    int i = HI[e], j = HJ[e];
+    int i = ism_ivjet_hi[e], j = ism_ivjet_hj[e];
     if (is_zero(a->d[i]) || is_zero(a->d[j]))
         return ivc(0.0);
     return i == j ? iv_square(a->d[i]) : iv_mul(a->d[i], a->d[j]);
@@ -160,7 +154,7 @@ static ALWAYS_INLINE void chain_hess(ism_ivjet *o, const ism_ivjet *a, ism_inter
                                      ism_interval g2, unsigned w)
 {
     _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-        o->h[e] = DO_H(w, e) ? addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e))) : ivc(0.0);
+        o->h[e] = do_h(w, e) ? addz(mulz(g1, a->h[e]), mulz(g2, dd(a, e))) : ivc(0.0);
 }
 
 /* The chain rule for out = g(a) given g(U), g'(U), g''(U). */
@@ -169,8 +163,8 @@ static ALWAYS_INLINE void chain(ism_ivjet *o, const ism_ivjet *a, ism_interval g
 {
     o->v = g;
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-        o->d[k] = DO_D(w, k) ? mulz(g1, a->d[k]) : ivc(0.0);
-    if (w & SECOND)
+        o->d[k] = do_d(w, k) ? mulz(g1, a->d[k]) : ivc(0.0);
+    if (keeps_hess(w))
         chain_hess(o, a, g1, g2, w);
 }
 
@@ -187,7 +181,7 @@ static ALWAYS_INLINE void each_hess(ism_ivjet *o, const ism_ivjet *a,
                                     unsigned w)
 {
     _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-        o->h[e] = !DO_H(w, e) ? ivc(0.0) : is_zero(a->h[e]) ? a->h[e] : fn(a->h[e], c);
+        o->h[e] = !do_h(w, e) ? ivc(0.0) : is_zero(a->h[e]) ? a->h[e] : fn(a->h[e], c);
 }
 
 /* Applies fn(., c) to the value and every derivative of a. */
@@ -197,8 +191,8 @@ static ALWAYS_INLINE void each(ism_ivjet *o, const ism_ivjet *a,
 {
     o->v = fn(a->v, c);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-        o->d[k] = !DO_D(w, k) ? ivc(0.0) : is_zero(a->d[k]) ? a->d[k] : fn(a->d[k], c);
-    if (w & SECOND)
+        o->d[k] = !do_d(w, k) ? ivc(0.0) : is_zero(a->d[k]) ? a->d[k] : fn(a->d[k], c);
+    if (keeps_hess(w))
         each_hess(o, a, fn, c, w);
 }
 
@@ -257,7 +251,7 @@ static void op_powc(ism_ivjet *o, const ism_ivjet *a, double c, unsigned w)
     }
     ism_interval whole = ism_iv_whole();
     ism_interval g1 = c > 1.0 || u.lo > 0.0 ? iv_mul_c(iv_powc(u, c - 1.0), c) : whole;
-    ism_interval g2 = !(w & SECOND)          ? ivc(0.0)
+    ism_interval g2 = !keeps_hess(w)          ? ivc(0.0)
                       : c > 2.0 || u.lo > 0.0 ? iv_mul(falling2(c), iv_powc(u, c - 2.0))
                                               : whole;
     chain(o, a, g, g1, g2, w);
@@ -281,11 +275,11 @@ static void op_sqrt_log(ism_ivjet *o, const ism_ivjet *a, int is_log, unsigned w
     ism_interval g1, g2 = ivc(0.0);
     if (is_log) {
         g1 = iv_c_div(1.0, u);
-        if (w & SECOND)
+        if (keeps_hess(w))
             g2 = iv_neg(iv_square(g1));
     } else {
         g1 = iv_c_div(0.5, g);                       /* 1 / (2 sqrt u) */
-        if (w & SECOND)
+        if (keeps_hess(w))
             g2 = iv_mul_c(iv_div(g1, u), -0.5);      /* -1 / (4 u sqrt u) */
     }
     chain(o, a, g, g1, g2, w);
@@ -370,14 +364,14 @@ static ALWAYS_INLINE void op_unary(ism_ivjet *o, const ism_instr *in, int op, co
         set_whole_derivs(o, a, a, w);
         return;
     }
-    chain(o, a, g, g1, (w & SECOND) ? second_factor(in, u, g, g1) : ivc(0.0), w);
+    chain(o, a, g, g1, keeps_hess(w) ? second_factor(in, u, g, g1) : ivc(0.0), w);
 }
 
 static ALWAYS_INLINE void add_hess(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b,
                                    int sub, unsigned w)
 {
     _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-        o->h[e] = !DO_H(w, e) ? ivc(0.0)
+        o->h[e] = !do_h(w, e) ? ivc(0.0)
                   : sub       ? subz(a->h[e], b->h[e])
                               : addz(a->h[e], b->h[e]);
 }
@@ -388,8 +382,8 @@ static ALWAYS_INLINE void op_add(ism_ivjet *o, const ism_ivjet *a, const ism_ivj
     ism_interval (*fn)(ism_interval, ism_interval) = sub ? subz : addz;
     o->v = sub ? iv_sub(a->v, b->v) : iv_add(a->v, b->v);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-        o->d[k] = DO_D(w, k) ? fn(a->d[k], b->d[k]) : ivc(0.0);
-    if (w & SECOND)
+        o->d[k] = do_d(w, k) ? fn(a->d[k], b->d[k]) : ivc(0.0);
+    if (keeps_hess(w))
         add_hess(o, a, b, sub, w);
 }
 
@@ -397,11 +391,11 @@ static ALWAYS_INLINE void mul_hess(ism_ivjet *o, const ism_ivjet *a, const ism_i
                                    unsigned w)
 {
     _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
-        if (!DO_H(w, e)) {
+        if (!do_h(w, e)) {
             o->h[e] = ivc(0.0);
             continue;
         }
-        int i = HI[e], j = HJ[e];
+        int i = ism_ivjet_hi[e], j = ism_ivjet_hj[e];
         ism_interval cross = addz(mulz(a->d[i], b->d[j]), mulz(a->d[j], b->d[i]));
         o->h[e] = addz(addz(mulz(a->h[e], b->v), mulz(a->v, b->h[e])), cross);
     }
@@ -412,8 +406,8 @@ static ALWAYS_INLINE void op_mul(ism_ivjet *o, const ism_ivjet *a, const ism_ivj
 {
     o->v = iv_mul(a->v, b->v);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-        o->d[k] = DO_D(w, k) ? addz(mulz(a->d[k], b->v), mulz(a->v, b->d[k])) : ivc(0.0);
-    if (w & SECOND)
+        o->d[k] = do_d(w, k) ? addz(mulz(a->d[k], b->v), mulz(a->v, b->d[k])) : ivc(0.0);
+    if (keeps_hess(w))
         mul_hess(o, a, b, w);
 }
 
@@ -427,20 +421,20 @@ static void op_div(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, unsigne
         return;
     }
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++) {
-        if (!DO_D(w, k)) {
+        if (!do_d(w, k)) {
             o->d[k] = ivc(0.0);
             continue;
         }
         ism_interval num = subz(a->d[k], mulz(q, b->d[k]));
         o->d[k] = is_zero(num) ? num : iv_div(num, b->v);
     }
-    if (w & SECOND) {
+    if (keeps_hess(w)) {
         _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++) {
-            if (!DO_H(w, e)) {
+            if (!do_h(w, e)) {
                 o->h[e] = ivc(0.0);
                 continue;
             }
-            int i = HI[e], j = HJ[e];
+            int i = ism_ivjet_hi[e], j = ism_ivjet_hj[e];
             ism_interval cross = addz(mulz(o->d[i], b->d[j]), mulz(b->d[i], o->d[j]));
             ism_interval num = subz(subz(a->h[e], cross), mulz(q, b->h[e]));
             o->h[e] = is_zero(num) ? num : iv_div(num, b->v);
@@ -452,10 +446,10 @@ static void op_div(ism_ivjet *o, const ism_ivjet *a, const ism_ivjet *b, unsigne
 static ALWAYS_INLINE void take_derivs(ism_ivjet *o, const ism_ivjet *src, unsigned w)
 {
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-        o->d[k] = DO_D(w, k) ? src->d[k] : ivc(0.0);
-    if (w & SECOND) {
+        o->d[k] = do_d(w, k) ? src->d[k] : ivc(0.0);
+    if (keeps_hess(w)) {
         _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-            o->h[e] = DO_H(w, e) ? src->h[e] : ivc(0.0);
+            o->h[e] = do_h(w, e) ? src->h[e] : ivc(0.0);
     }
 }
 
@@ -617,7 +611,7 @@ static ALWAYS_INLINE bool any_nan_h(const ism_ivjet *o)
 static ALWAYS_INLINE void sanitize_h(ism_ivjet *o, unsigned w)
 {
     _Pragma("GCC unroll 6") for (int e = 0; e < 6; e++)
-        if (DO_H(w, e))
+        if (do_h(w, e))
             o->h[e] = ism_iv_sane(o->h[e]);
 }
 
@@ -626,13 +620,13 @@ static ALWAYS_INLINE void sanitize_h(ism_ivjet *o, unsigned w)
  * checking each bound cost the torus's jets ~20% of their instructions. */
 static ALWAYS_INLINE void sanitize(ism_ivjet *o, unsigned w)
 {
-    if (!any_nan(o, (w & SECOND) != 0))
+    if (!any_nan(o, keeps_hess(w)))
         return;
     o->v = ism_iv_sane(o->v);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
-        if (DO_D(w, k))
+        if (do_d(w, k))
             o->d[k] = ism_iv_sane(o->d[k]);
-    if (w & SECOND)
+    if (keeps_hess(w))
         sanitize_h(o, w);
 }
 
@@ -680,7 +674,7 @@ ISM_AVX2_TWICE(size_t, run_jet,
                (const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                 const uint8_t *force, uint8_t *kinks, ism_ivjet *out),
                (t, ws, box, force, kinks, out),
-    const unsigned all = want_of(7u, 1, false);
+    const unsigned all = ism_ivjet_want(7u, 1, false);
     if (!fits(t, ws))
         return run_unfit(out, all);
     ism_ivjet *r = ws->r;
@@ -694,7 +688,7 @@ ISM_AVX2_TWICE(size_t, run_jet,
             kink = jet_op(in, r, f, all);
             sanitize(&r[in->out], all);
         } else {
-            unsigned w = want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, 1, in->smooth);
+            unsigned w = ism_ivjet_want(ISM_FREE_ALL & ~(unsigned)in->free_of, 1, in->smooth);
             kink = jet_op(in, r, f, w);
             sanitize(&r[in->out], w);
         }
@@ -856,7 +850,7 @@ ISM_AVX2_TWICE(size_t, hess_only,
                (const ism_tape *t, ism_ivjet_ws *ws, const kept_rec *kept,
                 const ism_interval box[3], uint8_t *kinks, ism_ivjet *out),
                (t, ws, kept, box, kinks, out),
-    const unsigned all = want_of(7u, 1, false);
+    const unsigned all = ism_ivjet_want(7u, 1, false);
     ism_ivjet *r = ws->r;
     ws->last_t = NULL;
     load_box(r, box, all);
@@ -865,7 +859,7 @@ ISM_AVX2_TWICE(size_t, hess_only,
         ism_ivjet *o = &r[in->out];
         unsigned w = in->free_of == 0
                          ? all
-                         : want_of(ISM_FREE_ALL & ~(unsigned)in->free_of, 1, in->smooth);
+                         : ism_ivjet_want(ISM_FREE_ALL & ~(unsigned)in->free_of, 1, in->smooth);
         o->v = kept_of(kept, i, 0);
         _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
             o->d[k] = kept_of(kept, i, k + 1);
