@@ -10,6 +10,8 @@
 #include "core/eval/workspace.h"
 #include <string.h>
 
+/* The two-register operations step_other hands dual_op (DIV_RR; +, − and × kept for
+ * completeness of the rule): min and max have their own steps. */
 static ism_dual dual_binary(int op, ism_dual a, ism_dual b)
 {
     ism_dual r;
@@ -29,15 +31,11 @@ static ism_dual dual_binary(int op, ism_dual a, ism_dual b)
         for (int k = 0; k < 3; k++)
             r.d[k] = a.d[k] * b.v + a.v * b.d[k];
         return r;
-    case ISM_OP_DIV_RR:
+    default: /* ISM_OP_DIV_RR (min and max have their own steps, which never come here) */
         r.v = a.v / b.v;
         for (int k = 0; k < 3; k++)
             r.d[k] = (a.d[k] - r.v * b.d[k]) / b.v;
         return r;
-    case ISM_OP_MIN_RR:
-        return ism_minmax_gradient_operand(true, a.v, b.v) ? b : a;
-    default: /* ISM_OP_MAX_RR */
-        return ism_minmax_gradient_operand(false, a.v, b.v) ? b : a;
     }
 }
 
