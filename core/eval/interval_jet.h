@@ -46,6 +46,15 @@ void ism_ivjet_ws_free(ism_ivjet_ws *ws);
 size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_interval box[3],
                               const uint8_t *force, uint8_t *kinks, ism_ivgrad *out);
 
+/* Whether ism_eval_interval_grad(t, ws, box, NULL, NULL, out) would return other than 0 (a
+ * free kink, or ws does not fit t), told from the natural enclosures alone: the same values
+ * bit for bit without the partials, stopping at the first free kink. For a caller that
+ * discards the slopes at a kink (the mean-value form), asked first where a kink may feed f
+ * (the last instruction not smooth: tape.h). Leaves no gradient pass in ws's registers
+ * (ism_ivjet_top_pieces reads none). */
+bool ism_eval_interval_meets_kink(const ism_tape *t, ism_ivjet_ws *ws,
+                                  const ism_interval box[3]);
+
 /* Right after an ism_eval_interval_grad of t on ws over box with no branch forced (force
  * NULL), or after a batched pass of t one of whose boxes is box (ism_eval_interval_grad_lanes
  * or _batch, no batched pass since), where t ends in a min or max of two registers (or of a
