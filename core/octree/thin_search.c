@@ -45,16 +45,16 @@ typedef struct sbox {
 } sbox;
 
 /* v when lo <= v <= hi, its own zero included (+0 against a bound -0: the Newton step's
- * p - t g when the two are equal), else the nearer bound; a NaN v gives lo (bounds are never
- * NaN). Bit for bit the library calls it replaces as GCC 12 compiled them: fmin(fmax(v, lo),
- * hi) was emitted as fmin(hi, fmax(lo, v)) (C leaves the sign of their zero open, so GCC
- * takes both as commutative), and glibc's x86-64 fmax and fmin (maxsd, minsd) give the second
- * operand when equal. Inline: the calls cost Barth's sextic at E 0.0259 2.5M instructions of
- * its probes' 16.7M. */
+ * p - t g when the two are equal), else the nearer bound; v is not NaN (step). Bit for bit
+ * the library calls it replaces as GCC 12 compiled them: fmin(fmax(v, lo), hi) was emitted as
+ * fmin(hi, fmax(lo, v)) (C leaves the sign of their zero open, so GCC takes both as
+ * commutative), and glibc's x86-64 fmax and fmin are maxsd and minsd (the second operand when
+ * equal), as these two lines compile. Inline: the calls cost Barth's sextic at E 0.0259 2.5M
+ * instructions of its probes' 16.7M. */
 static inline double clamp(double v, double lo, double hi)
 {
-    v = v >= lo ? v : lo;
-    return v <= hi ? v : hi;
+    v = lo > v ? lo : v;
+    return hi < v ? hi : v;
 }
 
 static bool other_sign(double f, int sign) { return sign > 0 ? f < 0 : f > 0; }
@@ -96,6 +96,26 @@ static void probe_start(probe_run *r, const ism_interval x[3])
     }
 }
 
+/* p moved by -t g and clamped to the box x, how far (summed over the axes) into the result.
+ * t and g are finite when finite_t (probe_take), so p - t g is not NaN; else an axis where g
+ * is 0 gets inf · 0 = NaN, which the fmax(lo, v) clamp replaced took as lo. Inlined twice, so
+ * that the check is made once a step, not once an axis. */
+static inline __attribute__((always_inline)) double step(double p[3], const double g[3],
+                                                         double t, const ism_interval x[3],
+                                                         bool finite_t)
+{
+    double moved = 0;
+    for (int k = 0; k < 3; k++) {
+        double v = p[k] - t * g[k];
+        if (!finite_t && isnan(v))
+            v = x[k].lo;
+        double q = clamp(v, x[k].lo, x[k].hi);
+        moved += fabs(q - p[k]);
+        p[k] = q;
+    }
+    return moved;
+}
+
 /* The probe r after f and its gradient g at r->p: HIT (r->p has the other sign), MISSED, or
  * GOES_ON from its next point, r->p. */
 static int probe_take(probe_run *r, int sign, double f, double g[3])
@@ -109,14 +129,13 @@ static int probe_take(probe_run *r, int sign, double f, double g[3])
     double gg = ism_dot3(g, g);
     if (r->it == PROBE_STEPS || !(gg > 0) || !isfinite(gg) || !isfinite(f))
         return PROBE_MISSED;
-    double t = (1 + PROBE_OVERSHOOT) * f / gg, moved = 0, last[3];
+    double t = (1 + PROBE_OVERSHOOT) * f / gg, moved, last[3];
     double *p = r->p;
     memcpy(last, p, sizeof last);
-    for (int k = 0; k < 3; k++) {
-        double q = clamp(p[k] - t * g[k], x[k].lo, x[k].hi);
-        moved += fabs(q - p[k]);
-        p[k] = q;
-    }
+    if (isfinite(t))
+        moved = step(p, g, t, x, true);
+    else /* f / gg overflowed (gg near the least doubles) */
+        moved = step(p, g, t, x, false);
     if (!(moved > PROBE_MIN_MOVE * r->size) ||
         (p[0] == r->before[0] && p[1] == r->before[1] && p[2] == r->before[2]))
         return PROBE_MISSED;
