@@ -236,3 +236,23 @@ Test(thin_probe_lanes, clamp_signed_zero_as_fmin_fmax)
         ism_tape_free(tape);
     }
 }
+
+/* A Newton step whose t = 1.5 f / |g|^2 overflows clamps as the fmax(lo, v) it replaced did:
+ * f = 1e-160 x + 1 - 2 y y from the centre 0 of [-1, 1]^3 has f = 1 and g = (1e-160, 0, 0),
+ * |g|^2 = 1e-320 (a subnormal, > 0), so t = inf: x goes to -inf and onto -1, y and z get
+ * 0 - inf * 0 = NaN, which fmax(lo, NaN) took as lo. The point (-1, -1, -1) has f = -1: the
+ * probe hits there. A NaN kept makes the step's move NaN and the probe miss. g must be 0 on
+ * an axis exactly, at the centre of a box round 0, so the box is not moved off the lattice. */
+Test(thin_probe_lanes, overflowed_step_clamps_nan_to_lo)
+{
+    pf_surface surf = { "1e-160 * x + 1 - 2 * y * y", NULL, 0, NULL, 0 };
+    ism_sampler s;
+    ism_tape *tape = pf_build_sampler(&surf, &s);
+    const double lo[3] = { -1, -1, -1 }, hi[3] = { 1, 1, 1 };
+    double at[3];
+    cr_assert(ism_thin_probe_one(&s, lo, hi, 1, at), "the probe missed");
+    cr_assert(at[0] == -1 && at[1] == -1 && at[2] == -1, "found (%g %g %g), not the corner",
+              at[0], at[1], at[2]);
+    ism_eval_ws_free(s.ws);
+    ism_tape_free(tape);
+}
