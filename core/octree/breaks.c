@@ -34,8 +34,6 @@
  * of the 8 corners a leaf; 4096 keys (32 KB) stay in the first-level cache. The duplicates
  * that slip through are dropped after the sort, as before. */
 #define CORNER_FILTER_BITS 12
-/* Below this many corners one block does all (a loop's threads cost more than they save). */
-#define MIN_PARALLEL_CORNERS (1u << 15)
 
 /* The coordinate along the key's axis of the point after key i of a sorted array a of n,
  * when it lies on the same line; else ISM_BREAK_NONE. */
@@ -429,7 +427,7 @@ bool ism_breaks_build(ism_breaks *b, const ism_octree *t, const uint8_t *take, i
     w.pool = pool;
     w.threads = ism_pool_threads(pool);
     /* one block per thread; a tree with few leaves has few nodes too: one block */
-    w.nblocks = 8 * t->n < MIN_PARALLEL_CORNERS ? 1 : (size_t)w.threads;
+    w.nblocks = 8 * t->n < ISM_BREAKS_MIN_PARALLEL_CORNERS ? 1 : (size_t)w.threads;
     size_t m = 0;
     bool ok = (w.per_block = malloc(w.nblocks * sizeof *w.per_block)) &&
               (w.gathered = malloc(w.nblocks * sizeof *w.gathered)) &&

@@ -26,6 +26,10 @@ typedef struct ism_breaks {
     size_t n;               /* registered points */
 } ism_breaks;
 
+/* Below this many corners (8 a node) ism_breaks_build works in one block, whatever the pool
+ * (a loop's threads cost more than they save); at or above it, one block per thread. */
+#define ISM_BREAKS_MIN_PARALLEL_CORNERS (1u << 15)
+
 /* Registers the corners of every non-empty leaf (with take: of those whose take[node] is
  * set), each with its successor on the three lattice lines through it, working on the
  * threads of pool (NULL: the calling thread alone; what their loops cost is added to *cost

@@ -135,21 +135,20 @@ typedef struct ism_tile {
 
 /* Tiles the face (axis, side) of leaf `node` by the non-empty leaves on the other side
  * (or the face itself when the other side is not finer). Calls emit for each tile; a face
- * that lies in the closed box of an empty node or a zero-free leaf yields nothing. Returns false if emit does.
+ * that lies in the closed box of an empty node or a zero-free leaf yields nothing. Returns
+ * false if emit does.
  * parent (ism_octree_parents, or NULL) lets the neighbour be found from the node's nearest
  * common ancestor instead of the root. */
 bool ism_octree_face_tiles(const ism_octree *t, const int32_t *parent, int32_t node, int axis,
                            int side, bool (*emit)(void *ctx, const ism_tile *tile), void *ctx);
 
-/* ism_octree_face_tiles of the node's six faces in one pass, face 2 × axis + side from 0 to
- * 5, each face's tiles in that call's order, emit told the face: the node's ancestors are
- * climbed once (parent) and each face's neighbour is found from them (the node's path with
- * the face's bit flipped below their common ancestor), with no search from a lattice point;
- * with parent NULL, each searched from the root as ism_octree_face_tiles does. Returns false
- * if emit does. */
 /* The nodes across the six faces of one parent, kept for its other children (a thread's
  * leaves come sibling after sibling: Klein's bottle at E 3.27e-3, 45,468 of 56,460 nodes
- * polygonised right after a sibling). Empty when zeroed. */
+ * polygonised right after a sibling). Empty when zeroed. Valid only while the tree and the
+ * parent array it was filled from stay as they were: the caller zeroes it whenever either
+ * may have changed (a new tree, a tree changed in place, an array freed and allocated
+ * again). The pointers it keeps only catch a different tree or array at a different
+ * address, not one at the same address. */
 typedef struct ism_nb_memo {
     const ism_node *nodes;   /* the tree and parent array it was filled from */
     const int32_t *parent;
@@ -157,10 +156,16 @@ typedef struct ism_nb_memo {
     int32_t nb[6];           /* the parent's neighbours, as ism_octree_node_tiles finds them */
 } ism_nb_memo;
 
-/* ... with memo (NULL: none; only used with parent): a child's neighbour across a face of
- * its parent is that of the parent's neighbour there toward the child, or the neighbour
- * itself when it is a leaf (the node's path below the common ancestor, one step shorter);
- * the parent's six are found once for its children in a row. */
+/* ism_octree_face_tiles of the node's six faces in one pass, face 2 × axis + side from 0 to
+ * 5, each face's tiles in that call's order, emit told the face: the node's ancestors are
+ * climbed once (parent) and each face's neighbour is found from them (the node's path with
+ * the face's bit flipped below their common ancestor), with no search from a lattice point;
+ * with parent NULL, each searched from the root as ism_octree_face_tiles does. memo (NULL:
+ * none; only used with parent; see ism_nb_memo for when to zero it) keeps the parent's six
+ * neighbours for its children in a row: a child's neighbour across a face of its parent is
+ * that of the parent's neighbour there toward the child, or the neighbour itself when it is
+ * a leaf (the node's path below the common ancestor, one step shorter). Returns false if
+ * emit does. */
 bool ism_octree_node_tiles(const ism_octree *t, const int32_t *parent, int32_t node,
                            ism_nb_memo *memo,
                            bool (*emit)(void *ctx, int face, const ism_tile *tile), void *ctx);

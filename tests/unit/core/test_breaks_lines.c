@@ -3,14 +3,16 @@
  * comparison sort (qsort, not the registry's radix passes), and each point's successor read
  * off the next point on its line. The registry must hold exactly those points, each with
  * those three successors (ISM_BREAK_NONE past a line's last point), on adapted trees of the
- * ring torus, Barth's sextic and the gyroid ball in the three box placements. It guards the
- * successors along x and y, sorted by the line alone (link_axis: the points of a line come
- * in order along it from the sort along z). */
+ * ring torus, Barth's sextic and the gyroid ball in the three box placements, built on one
+ * block and on a 2-thread pool's two blocks. It guards the successors along x and y, sorted
+ * by the line alone (link_axis: the points of a line come in order along it from the sort
+ * along z), and the radix passes' order across blocks. */
 #include <criterion/criterion.h>
 #include <stdlib.h>
 #include <string.h>
 #include "core/octree/breaks.h"
 #include "core/octree/octree_build.h"
+#include "core/util/pool.h"
 #include "poly_fixture.h"
 
 #define MAX_DEPTH 7
@@ -87,14 +89,15 @@ static size_t leaf_corners(const ism_octree *tree, int32_t (**out)[3])
     return m;
 }
 
-/* The registry of tree's leaves against the sorted corners, every point on every axis; the
- * points that have a successor along x and y counted into *linked. */
-static void check_tree(const ism_octree *tree, size_t *linked)
+/* The registry of tree's leaves, built on pool (NULL: one block), against the sorted
+ * corners, every point on every axis; the points that have a successor along x and y counted
+ * into *linked. */
+static void check_tree(const ism_octree *tree, ism_pool *pool, size_t *linked)
 {
     int32_t (*p)[3];
     size_t n = leaf_corners(tree, &p);
     ism_breaks b;
-    cr_assert(ism_breaks_build(&b, tree, NULL, NULL, NULL));
+    cr_assert(ism_breaks_build(&b, tree, NULL, pool, NULL));
     cr_assert_eq(b.n, n, "%zu points registered, %zu leaf corners", b.n, n);
     for (int axis = 0; axis < 3; axis++) {
         sort_axis = axis;
@@ -116,14 +119,22 @@ static void check_tree(const ism_octree *tree, size_t *linked)
 static void check_surface(const pf_surface *s)
 {
     ism_tape *t = pf_compile(s);
+    /* two threads: the radix passes count and scatter in two blocks, which must keep the
+       order a single block makes (digit_offsets: blocks in order within a digit) */
+    ism_pool *pool = ism_pool_new(2);
+    cr_assert(pool && ism_pool_threads(pool) == 2);
     size_t linked = 0;
     for (int placement = pf_first_box() - 1; placement <= 1; placement++) {
         ism_octree tree;
         build(t, placement, &tree);
-        check_tree(&tree, &linked);
+        /* enough nodes for ism_breaks_build to split its arrays into the pool's blocks */
+        cr_assert_geq(8 * tree.n, ISM_BREAKS_MIN_PARALLEL_CORNERS, "%zu nodes", tree.n);
+        check_tree(&tree, NULL, &linked);
+        check_tree(&tree, pool, &linked);
         ism_octree_free(&tree);
     }
     cr_assert_gt(linked, 1000); /* lines of many points along x and y, not a few */
+    ism_pool_free(pool);
     ism_tape_free(t);
 }
 

@@ -104,6 +104,15 @@ typedef struct sweep {
 typedef void (*node_check)(const ism_octree *tree, const int32_t *parent, size_t node,
                            sweep *w);
 
+static size_t gcd(size_t a, size_t b)
+{
+    while (b) {
+        size_t r = a % b;
+        a = b, b = r;
+    }
+    return a;
+}
+
 /* check on every node of s's trees in the three placements; *w's counts. */
 static void over_nodes(const pf_surface *s, node_check check, sweep *w)
 {
@@ -115,6 +124,9 @@ static void over_nodes(const pf_surface *s, node_check check, sweep *w)
         int32_t *parent = ism_octree_parents(&tree);
         cr_assert(parent);
         memset(&w->memo, 0, sizeof w->memo);
+        /* i × stride mod n visits every node once only when stride and n are coprime */
+        cr_assert_eq(gcd(w->stride, tree.n), 1, "stride %zu shares a factor with %zu nodes",
+                     w->stride, tree.n);
         for (size_t i = 0; i < tree.n; i++)
             check(&tree, parent, i * w->stride % tree.n, w);
         free(parent);
