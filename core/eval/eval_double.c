@@ -433,7 +433,8 @@ void ism_eval_batch(const ism_tape *t, ism_eval_ws *ws, const double *x, const d
 /* One instruction over n lanes of registers ISM_EVAL_BATCH apart: the frequent arithmetic
  * four lanes at a time (the last n % 4 alone), min, max, sine and cosine as lane loops (the
  * latter through the memo trig), the rest lane by lane through op_value — each lane's
- * arithmetic is run_threaded's. */
+ * arithmetic is run_threaded's. o, a and b restrict: no tape instruction writes a register
+ * it reads (tape.h; test_eval_grad_batch's no_instruction_writes_its_operand). */
 static inline __attribute__((always_inline)) void narrow_op(const ism_instr *in, double *regs,
                                                             ism_trig_cache *trig, size_t n)
 {
