@@ -62,13 +62,11 @@ static void corner_mean(const double (*p)[3], int n, double c[3])
             c[k] += p[i][k] / n;
 }
 
-/* The polygon's centre moved toward f = 0 along ∇f, as triangulate.c fans from it; f0, g0:
- * f and ∇f at the corners' mean when the caller has them (ism_sample_grad's bits), else
- * NULL. */
-static void centre_on_surface(ism_sampler *s, const double (*p)[3], int n, const double *f0,
-                              const double *g0, double c[3])
+/* The polygon's centre c, which starts at the corners' mean (corner_mean), moved toward
+ * f = 0 along ∇f, as triangulate.c fans from it; f0, g0: f and ∇f at that start when the
+ * caller has them (ism_sample_grad's bits), else NULL. */
+static void centre_on_surface(ism_sampler *s, const double *f0, const double *g0, double c[3])
 {
-    corner_mean(p, n, c);
     for (int it = 0; it < CENTRE_NEWTON_STEPS; it++) {
         double g[3], f;
         if (it == 0 && f0) {
@@ -147,13 +145,13 @@ static double loop_error(ism_sampler *s, const double (*p)[3], int n, double bou
        edges' batch (a lane of its padding for up to seven sides: one scalar evaluation less;
        gyroid ball at E = 1e-3, callgrind, one thread, ism_mesh_surface: 1,978.0M ->
        1,975.3M); the scalar reference path (!s->batch) takes it on its own, as before */
-    double c0[3], f0, g0[3];
+    double f0, g0[3];
     bool fan = n >= 5, ride = fan && s->batch;
-    if (ride)
-        corner_mean(p, n, c0);
-    if (measure_beyond(s, q, m, &worst, bound, ride ? c0 : NULL, &f0, g0) || !fan)
+    if (fan)
+        corner_mean(p, n, c);
+    if (measure_beyond(s, q, m, &worst, bound, ride ? c : NULL, &f0, g0) || !fan)
         return worst;
-    centre_on_surface(s, p, n, ride ? &f0 : NULL, g0, c);
+    centre_on_surface(s, ride ? &f0 : NULL, g0, c);
     m = 0;
     q[m++] = (loop_pt){{c[0], c[1], c[2]}, {NULL, NULL, NULL}, 0};
     for (int i = 0; i < n; i++) {
@@ -173,9 +171,10 @@ static bool loop_tris(ism_sampler *s, const double (*p)[3], int n, ism_cell_out 
         ism_fpoint v = {{0, 0, 0}, {0, 0, 0}, 0};
         if (i < n)
             memcpy(v.p, p[i], sizeof v.p);
-        else if (n >= 5)
-            centre_on_surface(s, p, n, NULL, NULL, v.p);
-        else
+        else if (n >= 5) {
+            corner_mean(p, n, v.p);
+            centre_on_surface(s, NULL, NULL, v.p);
+        } else
             break;
         if (!ism_cell_out_vert(out, &v, &idx))
             return false;
