@@ -35,7 +35,7 @@
  * undefined behaviour); use _Pragma.
  *
  * Older hand-written pairs to move onto it: eval_interval_grad_batch.c, eval_hessian_batch.c,
- * eval_double.c, eval_gradient.c, eval_gradient_batch.c, dual_cert.c. */
+ * eval_gradient.c, eval_gradient_batch.c, dual_cert.c. */
 #if ISM_HAVE_AVX2_CLONE
 #define ISM_AVX2_TWICE(RET, NAME, PARAMS, ARGS, ...)                                       \
     static RET NAME##_base PARAMS { __VA_ARGS__ }                                            \

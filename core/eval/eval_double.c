@@ -361,31 +361,12 @@ static inline __attribute__((always_inline)) void batch_op(const ism_instr *in, 
 /* The tape over one chunk, compiled twice: for AVX2 (4 lanes per vector) and for the
  * x86-64 baseline (SSE2, 2 lanes); chosen at run time by what the CPU supports
  * (avx2_clone.h). */
-#if ISM_HAVE_AVX2_CLONE
-ISM_AVX2_CLONE
-static void run_tape_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ngroups)
-{
+ISM_AVX2_TWICE(void, run_tape,
+               (const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ngroups),
+               (t, regs, trig, ngroups),
     for (size_t i = 0; i < t->len; i++)
         batch_op(&t->code[i], regs, trig, ngroups);
-}
-#endif
-
-static void run_tape_base(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ngroups)
-{
-    for (size_t i = 0; i < t->len; i++)
-        batch_op(&t->code[i], regs, trig, ngroups);
-}
-
-static void run_tape(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ngroups)
-{
-#if ISM_HAVE_AVX2_CLONE
-    if (ISM_RUN_AVX2()) {
-        run_tape_avx2(t, regs, trig, ngroups);
-        return;
-    }
-#endif
-    run_tape_base(t, regs, trig, ngroups);
-}
+)
 
 /* Evaluates n <= ISM_EVAL_BATCH points; lanes past n (up to a whole group) repeat the
  * last point so that they compute harmless values. */
