@@ -7,18 +7,8 @@
 #define ISM_SHORTEN_H
 
 #include "core/eval/eval.h"
-#include "core/expr/tape.h"
 
-#include <stdbool.h>
 #include <stdint.h>
-
-/* Is op a min or max, the operations shortening decides (abs is a kink it keeps)? Inline:
- * asked of every instruction by the shortening and the memo's key (shorten_memo.c). */
-static inline bool ism_op_is_min_max(int op)
-{
-    return op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR ||
-           op == ISM_OP_MAX_RC;
-}
 
 /* ism_tape_shorten's pass: f's interval over the box x × y × z into *range, and the choices
  * at t's min/max (and abs) in ws (ism_tape_shorten_choices). False, *range the whole line

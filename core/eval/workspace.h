@@ -42,13 +42,6 @@ static inline int ism_ws_fits(const ism_eval_ws *ws, const ism_tape *t)
     return ws && t && ws->nregs >= t->nregs && ws->code_cap >= t->len;
 }
 
-/* Is op a kink: min, max or abs (an ism_piece names its branch)? */
-static inline bool ism_op_is_kink(int op)
-{
-    return op == ISM_OP_MIN_RR || op == ISM_OP_MAX_RR || op == ISM_OP_MIN_RC ||
-           op == ISM_OP_MAX_RC || op == ISM_OP_ABS;
-}
-
 /* What kink in passes on its branch br (1 or 2, as an ism_piece names it and as shortening
  * records a decided min/max): its operand a, its register b, its constant (the _RC forms'
  * branch 2) or -a (abs on branch 2). One rule for the shortened tapes (shorten.c) and the

@@ -100,6 +100,20 @@ static inline int ism_op_has_reg_b(int op)
     }
 }
 
+/* Is op a min or max, the kinks shortening decides (abs is a kink it keeps)? Inline: asked
+ * of every instruction by the shortening (shorten.c) and the memo's key (shorten_memo.c). */
+static inline bool ism_op_is_min_max(int op)
+{
+    return op == ISM_OP_MIN_RR || op == ISM_OP_MIN_RC || op == ISM_OP_MAX_RR ||
+           op == ISM_OP_MAX_RC;
+}
+
+/* Is op a kink: min, max or abs (an ism_piece names its branch)? */
+static inline bool ism_op_is_kink(int op)
+{
+    return ism_op_is_min_max(op) || op == ISM_OP_ABS;
+}
+
 /* f's top min/max: the last instruction when it is a register min or max writing the result
  * (the one kink whose two operands crease-aware code reads as f's branches), else NULL. */
 static inline const ism_instr *ism_tape_top_minmax(const ism_tape *t)

@@ -3,7 +3,6 @@
  * short list of keys met (a list: a tape's keys are few, 3 to the power of its undecided
  * min/max at most, and Barth's sextic and the gyroid ball have one max). */
 #include "core/octree/shorten_memo.h"
-#include "core/eval/shorten.h"
 #include "core/expr/tape.h"
 #include "core/util/grow.h"
 
