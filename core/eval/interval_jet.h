@@ -51,7 +51,8 @@ size_t ism_eval_interval_grad(const ism_tape *t, ism_ivjet_ws *ws, const ism_int
  * bit for bit without the partials, stopping at the first free kink. For a caller that
  * discards the slopes at a kink (the mean-value form), asked first where a kink may feed f
  * (the last instruction not smooth: tape.h). Leaves no gradient pass in ws's registers
- * (ism_ivjet_top_pieces reads none). */
+ * (ism_ivjet_top_pieces reads none): the registers it ran through hold their values with
+ * every partial 0, not a gradient, for any later reader of ws. */
 bool ism_eval_interval_meets_kink(const ism_tape *t, ism_ivjet_ws *ws,
                                   const ism_interval box[3]);
 
