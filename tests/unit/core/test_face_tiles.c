@@ -14,6 +14,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include "core/octree/octree_build.h"
+#include "octree_fixture.h"
 #include "poly_fixture.h"
 
 #define MAX_DEPTH 7
@@ -37,23 +38,7 @@ static bool keep(void *ctx, const ism_tile *tile)
 
 static void build(const ism_tape *t, int placement, ism_octree *tree)
 {
-    const double base[6] = {-HALF, -HALF, -HALF, HALF, HALF, HALF};
-    double box[6];
-    pf_sweep_box(base, MAX_DEPTH, placement, box);
-    memset(tree, 0, sizeof *tree);
-    ism_grid_init(&tree->grid, box, MAX_DEPTH);
-    ism_octree_build_params p = {
-        .tape = t,
-        .min_depth = 3,
-        .max_depth = MAX_DEPTH,
-        .flatness = {.gradient_test = 0.9, .normal_cos = 0.9, .plane_frac = 0.05,
-                     .abs_tol = 0.25 * ism_grid_cell_size(&tree->grid, MAX_DEPTH),
-                     .double_root_eps = 1e-9, .double_root_iters = 25, .max_error = MAX_ERROR},
-        .threads = 1,
-        .max_nodes = (size_t)1 << 26,
-    };
-    ism_octree_build_stats st;
-    cr_assert_eq(ism_octree_build(tree, &p, &st), ISM_BUILD_OK);
+    of_build_swept(t, HALF, MAX_DEPTH, MAX_ERROR, placement, tree);
 }
 
 /* Each tile lies in node's face (axis, side): on its plane, inside its rectangle. */
