@@ -440,9 +440,10 @@ static bool edges_rootless(ism_sampler *s, const ism_flatness *fl, const ism_cor
 /* A node whose corner gradients disagree, under an error bound: when crossed (nroots > 0),
  * its secant roots' centroid (their sum / nroots) within CENTROID_SAG_ERRORS (E + shift) of
  * the surface — a cheap screen before the exact roots (most such nodes are far too coarse) —
- * then f proven one graph over the box, and no root on a same-sign edge whose gradients
- * disagree (a graph may dip through an edge twice; the polygon would miss it). The
- * measurement decides after. */
+ * then f proven one graph over the box by its whole enclosure (ism_graph_certified_whole:
+ * the halves' proof admits curved nodes many E across whose polygons the tests below do not
+ * follow), and no root on a same-sign edge whose gradients disagree (a graph may dip through
+ * an edge twice; the polygon would miss it). The measurement decides after. */
 static bool graph_node_passes(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
                               const double lo[3], const double hi[3], const ism_corners *k,
                               const double sum[3], int nroots, const int *disagree,
@@ -454,7 +455,7 @@ static bool graph_node_passes(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatn
         if (!(ism_sample_dist(s, c) <= room))
             return false;
     }
-    if (!ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval, NULL))
+    if (!ism_graph_certified_whole(s->tape, jet, lo, hi, &s->n_interval))
         return false;
     return edges_rootless(s, fl, k, disagree, ndisagree);
 }

@@ -9,8 +9,9 @@
  * root box's upper faces, the grid's last cell); and a torus with a small ball beside it at
  * depths 1 to 10 (leaves of levels 2 to 8 beside the grid's cells of level 6). Each tree's
  * leaves wider than NEAR_BIG_CELLS cells (taken unasked) and narrower than a cell are
- * counted, and asserted where a case is meant to have them (the torus at depth 7 has both:
- * 739 and 268 over the boxes, levels 3 to 7 beside cells of level 6). */
+ * counted, and asserted where a case is meant to have them (the torus at depth 7 had both,
+ * 739 and 268 over the boxes, until graph_cert.c proved its nodes on halves (graph32): now
+ * 0 and 6,273, its commonest level coarser; the torus with a ball keeps both). */
 #include <criterion/criterion.h>
 #include <string.h>
 #include "core/expr/tape.h"
@@ -195,7 +196,6 @@ Test(breaks_near, takes_every_leaf_touching_and_answers_as_the_whole_tree)
 {
     paths pt;
     check_sweep(&torus, 1.5, 3, MAX_DEPTH, PICK_STRIDE, &pt);
-    cr_assert_gt(pt.big, 0);
     cr_assert_gt(pt.sub_cell_left, 0);
     cr_assert_gt(pt.left, 0);
 }
