@@ -5,7 +5,7 @@
 #define ISM_VERSION_H
 
 #define ISM_VERSION "0.1.0"
-#define ISM_MESHER_VERSION "mesher-35"
+#define ISM_MESHER_VERSION "mesher-36"
 /* How a preview ("preview": true) searches for pieces hidden from the cells' corners: part of
  * a preview's cache key only, so previews made before the search changed are not served. */
 #define ISM_PREVIEW_SEARCH "thin-coarse"
