@@ -405,6 +405,7 @@ typedef struct split_in {
 typedef struct split_job {
     dual *d;
     const int32_t *nodes;
+    size_t m; /* nodes in the block */
     split_in *in;
     split_out *out;
     uint32_t *lane;
@@ -508,70 +509,85 @@ static void feet_task(void *ctx, size_t k, int thread)
  * (interval_jet.h, ISM_IVGRAD_BATCH's figures). */
 #define BATCH_ENCLOSURES 2
 
-/* leaf_kind of the children kids[0..8) of a split node (views: their corners) into kind:
- * every child's classify_head first (but those in empty, bit c: child c found DN_EMPTY by
- * split_task from the masks, its view not made), then the natural enclosures the undecided ones'
- * tails take in one batch (bit for bit the box-by-box pass's, its records kept for the Taylor
- * models' jets over the same boxes: classify_tail takes them from v->g), then the Taylor
- * models of those whose tails will tighten made at once (ism_dual_pre_models; when it runs,
- * its centre batch, ism_eval_interval_grad_batch, resets the records of the siblings it did
- * not pick: their tails' jets, if any, run whole), then the tails and box_kind. Child by
+/* Nodes whose children one task of the split pass's last step classifies together
+ * (split_task): their natural enclosures and Taylor models are batched across the nodes, so
+ * the lanes' groups of four fill. One node's children alone left them part empty: the torus
+ * at 1e-2 took its 1,264 natural enclosures in 344 groups and its 664 models in 216 (32 of
+ * them alone), at 3.57e-3 3,088 in 960 and 856 in 416. Whole runs (bench_error mesh P E 10
+ * threads=1, callgrind on ism_mesh_surface), 1 / 2 / 4 / 8 nodes a task: torus 1e-2 15.35M /
+ * 15.29M / 15.04M / 14.99M, 3.57e-3 34.61M / 34.10M / 33.69M / 33.44M, sphere 1e-2 1.845M /
+ * 1.845M / 1.843M / 1.843M, the same meshes. 8: 64 views (60 KB) on a task's stack. A
+ * constant, so a task's nodes, and the mesh, do not depend on the threads. */
+#define SPLIT_CHUNK 8
+
+/* leaf_kind of the children kids[0..8 nodes) of `nodes` split nodes (views: their
+ * corners; node j's children at 8 j ..) into kind, bad[j] set when node j's children meet
+ * the request's box: every child's classify_head first (but those in empty[j], bit c:
+ * node j's child c found DN_EMPTY by split_task from the masks, its view not made), then
+ * the natural enclosures the undecided ones' tails take, ISM_IVGRAD_BATCH at a time (bit for
+ * bit the box-by-box pass's, their records kept for the Taylor models' jets over the same
+ * boxes: classify_tail takes them from v->g), then the Taylor models of those whose tails
+ * will tighten made at once (ism_dual_pre_models), then the tails and box_kind. Child by
  * child near singular points (leaf_kind's balls come first). */
-static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, uint8_t empty,
-                      int kind[8], bool *bad)
+static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, const uint8_t *empty,
+                      size_t nodes, int *kind, bool *bad)
 {
+    size_t nk = 8 * nodes;
     if (d->nballs) {
-        for (int c = 0; c < 8; c++)
-            kind[c] = leaf_kind(d, w, &kids[c], &views[c], bad);
+        for (size_t i = 0; i < nk; i++)
+            kind[i] = leaf_kind(d, w, &kids[i], &views[i], &bad[i / 8]);
         return;
     }
-    ism_interval box[8][3];
-    ism_ivgrad g[8];
-    int at[8], nb = 0;
-    for (int c = 0; c < 8; c++) {
-        kind[c] = empty >> c & 1 ? DN_EMPTY : ism_dual_classify_head(d, w, &kids[c], &views[c]);
-        if (kind[c] != UNDECIDED || !tail_wants_g(d, &views[c]) || d->crease)
+    int at[8 * SPLIT_CHUNK], nb = 0;
+    for (size_t i = 0; i < nk; i++) {
+        kind[i] = empty[i / 8] >> (i % 8) & 1
+                      ? DN_EMPTY
+                      : ism_dual_classify_head(d, w, &kids[i], &views[i]);
+        if (kind[i] != UNDECIDED || !tail_wants_g(d, &views[i]) || d->crease)
             continue; /* a crease's tape has its min/max: not one the batch takes */
-        ism_dual_node_box(&views[c], box[nb]);
-        at[nb++] = c;
+        at[nb++] = (int)i;
     }
-    if (nb >= BATCH_ENCLOSURES &&
-        ism_eval_interval_grad_batch(w->s.tape, w->jet, (const ism_interval (*)[3])box,
-                                     (size_t)nb, g)) {
-        for (int k = 0; k < nb; k++) {
-            views[at[k]].g = g[k];
-            views[at[k]].pre_g = true;
+    int nat = 0; /* at[0..nat): natural enclosures in views (pre_g) */
+    for (int b = 0; nb - b >= BATCH_ENCLOSURES; b += ISM_IVGRAD_BATCH) {
+        int m = nb - b < ISM_IVGRAD_BATCH ? nb - b : ISM_IVGRAD_BATCH;
+        ism_interval box[ISM_IVGRAD_BATCH][3];
+        ism_ivgrad g[ISM_IVGRAD_BATCH];
+        for (int k = 0; k < m; k++)
+            ism_dual_node_box(&views[at[b + k]], box[k]);
+        if (!ism_eval_interval_grad_batch(w->s.tape, w->jet, (const ism_interval (*)[3])box,
+                                          (size_t)m, g))
+            break;
+        for (int k = 0; k < m; k++) {
+            views[at[b + k]].g = g[k];
+            views[at[b + k]].pre_g = true;
         }
-        ism_dual_pre_models(w, kids, views, at, nb);
+        nat = b + m;
     }
-    for (int c = 0; c < 8; c++) {
-        if (empty >> c & 1)
+    if (nat)
+        ism_dual_pre_models(w, kids, views, at, nat);
+    for (size_t i = 0; i < nk; i++) {
+        if (empty[i / 8] >> (i % 8) & 1)
             continue; /* box_kind leaves DN_EMPTY as it is */
-        if (kind[c] == UNDECIDED)
-            kind[c] = ism_dual_classify_tail(d, w, &kids[c], &views[c]);
-        kind[c] = box_kind(d, w, &kids[c], &views[c], kind[c], bad);
+        if (kind[i] == UNDECIDED)
+            kind[i] = ism_dual_classify_tail(d, w, &kids[i], &views[i]);
+        kind[i] = box_kind(d, w, &kids[i], &views[i], kind[i], &bad[i / 8]);
     }
 }
 
-/* Last task of a split pass: node nodes[k]'s children classified from what the first two
- * left in in[k] (kid_kinds). Reads the tree, writes out[k] only. */
-static void split_task(void *ctx, size_t k, int thread)
+/* Node k of a split pass's block: its children's nodes and views (kids, views: 8 each) from
+ * what the first two tasks left in in[k]; *empty, bit c: child c empty from the masks alone
+ * (no view made). */
+static void split_kids(const split_job *job, size_t k, dnode *kids, corner_view *views,
+                       uint8_t *empty)
 {
-    split_job *job = ctx;
     dual *d = job->d;
-    worker *w = &d->w[thread];
     const dnode *parent = &d->n[job->nodes[k]];
     const split_in *in = &job->in[k];
-    split_out *out = &job->out[k];
     int32_t half = ism_grid_cell_steps(&d->g, parent->level + 1);
     const double *f = in->f;
     const double (*p)[3] = (const double (*)[3])in->p, (*g)[3] = (const double (*)[3])in->g;
     uint8_t known = in->known;
-    out->bad = false;
-    out->kinked = 0;
-    dnode kids[8];
-    corner_view views[8];
-    uint8_t empty = 0; /* bit c: child c empty from the masks alone (no view made) */
+    *empty = 0;
     for (int c = 0; c < 8; c++) {
         corner_view *v = &views[c];
         v->kinked = false;
@@ -591,7 +607,7 @@ static void split_task(void *ctx, size_t k, int thread)
            whatever else the view holds (not so near points: leaf_kind asks the balls first) */
         if (!d->nballs && v->corners != CORNERS_NOT_FINITE && (neg == 0 || neg == m) &&
             (known >> c & 1)) {
-            empty |= (uint8_t)(1u << c);
+            *empty |= (uint8_t)(1u << c);
 #pragma GCC unroll 8
             for (int j = 0; j < 8; j++)
                 n->f[j] = f[SPLIT_OFF[c] + SPLIT_OFF[j]];
@@ -610,17 +626,39 @@ static void split_task(void *ctx, size_t k, int thread)
             memcpy(v->n[j], g[at], sizeof v->n[j]);
         }
     }
-    int kind[8];
-    kid_kinds(d, w, kids, views, empty, kind, &out->bad);
-    for (int c = 0; c < 8; c++) {
-        corner_view *v = &views[c];
-        memcpy(out->f[c], kids[c].f, sizeof kids[c].f);
-        out->kind[c] = (uint8_t)kind[c];
-        out->kinked |= (uint8_t)(v->kinked << c);
-        out->placed[c] = v->placed;
-        out->free_kids[c] = v->free_kids;
-        if (v->placed == FOOT_AT)
-            memcpy(out->at[c], v->at, sizeof v->at);
+}
+
+/* Last task of a split pass: the children of nodes SPLIT_CHUNK k .. of the block classified
+ * together (kid_kinds) from what the first two tasks left in in[]. Reads the tree, writes
+ * those nodes' out[] only. */
+static void split_task(void *ctx, size_t k, int thread)
+{
+    split_job *job = ctx;
+    dual *d = job->d;
+    worker *w = &d->w[thread];
+    size_t lo = k * SPLIT_CHUNK, nodes = job->m - lo < SPLIT_CHUNK ? job->m - lo : SPLIT_CHUNK;
+    dnode kids[8 * SPLIT_CHUNK];
+    corner_view views[8 * SPLIT_CHUNK];
+    uint8_t empty[SPLIT_CHUNK];
+    bool bad[SPLIT_CHUNK] = {false};
+    int kind[8 * SPLIT_CHUNK];
+    for (size_t j = 0; j < nodes; j++)
+        split_kids(job, lo + j, &kids[8 * j], &views[8 * j], &empty[j]);
+    kid_kinds(d, w, kids, views, empty, nodes, kind, bad);
+    for (size_t j = 0; j < nodes; j++) {
+        split_out *out = &job->out[lo + j];
+        out->bad = bad[j];
+        out->kinked = 0;
+        for (int c = 0; c < 8; c++) {
+            const corner_view *v = &views[8 * j + (size_t)c];
+            memcpy(out->f[c], kids[8 * j + (size_t)c].f, sizeof out->f[c]);
+            out->kind[c] = (uint8_t)kind[8 * j + (size_t)c];
+            out->kinked |= (uint8_t)(v->kinked << c);
+            out->placed[c] = v->placed;
+            out->free_kids[c] = v->free_kids;
+            if (v->placed == FOOT_AT)
+                memcpy(out->at[c], v->at, sizeof v->at);
+        }
     }
 }
 
@@ -640,13 +678,13 @@ static void split_pass(dual *d, const int32_t *nodes, split_out *out, size_t n)
     }
     for (size_t b = 0; b < n;) {
         size_t m = !in ? 1 : n - b < SPLIT_BLOCK ? n - b : SPLIT_BLOCK;
-        split_job job = {d, nodes + b, in ? in : &one, out + b, lane, 0};
+        split_job job = {d, nodes + b, m, in ? in : &one, out + b, lane, 0};
         ism_pool_for(d->pool, m, corners_task, &job, NULL);
         for (size_t k = 0; lane && k < m; k++)
             for (unsigned w = job.in[k].wants; w; w &= w - 1)
                 lane[job.nlanes++] = (uint32_t)(8 * k + (size_t)__builtin_ctz(w));
         ism_pool_for(d->pool, (job.nlanes + FEET_LANES - 1) / FEET_LANES, feet_task, &job, NULL);
-        ism_pool_for(d->pool, m, split_task, &job, NULL);
+        ism_pool_for(d->pool, (m + SPLIT_CHUNK - 1) / SPLIT_CHUNK, split_task, &job, NULL);
         b += m;
     }
     free(in);
@@ -1144,6 +1182,37 @@ bool ism_dual_wanted(const ism_tape *f, const ism_poly_options *o)
     return ism_dual_declined_before(f, &asked) == ISM_DUAL_WHY_NONE;
 }
 
+/* The miss masks of the round's triangles into miss[0..nt): those ism_dual_emit_quads measured
+ * read from d->tmiss (a second measure gives the same masks: the pairs' distances from the
+ * memo, the centroids measured again), the others (the fans' triangles, a quad's lone
+ * triangle) measured now. Torus at 1e-2: 696 of its 984 triangles read, 15.395M -> 15.364M
+ * instructions, 3.57e-3 34.82M -> 34.66M (bench_error, callgrind on ism_mesh_surface). */
+static void measure_round(dual *d, uint8_t *miss)
+{
+    const uint8_t *known = d->ntmiss == d->nt ? d->tmiss : NULL;
+    uint32_t *list = known ? malloc((d->nt ? d->nt : 1) * sizeof *list) : NULL;
+    if (!list) { /* nothing known (or no memory for the list): every triangle */
+        ism_dual_measure_triangles(d, NULL, d->nt, miss);
+        return;
+    }
+    size_t nl = 0;
+    for (size_t t = 0; t < d->nt; t++) {
+        miss[t] = known[t] & (uint8_t)~TMISS_KNOWN;
+        if (!(known[t] & TMISS_KNOWN))
+            list[nl++] = (uint32_t)t;
+    }
+    uint8_t *lmiss = nl ? malloc(nl) : NULL;
+    if (nl && !lmiss)
+        ism_dual_measure_triangles(d, NULL, d->nt, miss);
+    else if (nl) {
+        ism_dual_measure_triangles(d, list, nl, lmiss);
+        for (size_t k = 0; k < nl; k++)
+            miss[list[k]] = lmiss[k];
+    }
+    free(lmiss);
+    free(list);
+}
+
 /* The round's triangles measured; where every miss is a side a few E off those sides are cut
  * (dual_sides.h: nothing to mark), else the leaves round the misses are marked
  * (ism_dual_mark_misses). Returns the leaves marked; the misses at max_depth into *missed. */
@@ -1155,7 +1224,7 @@ static size_t mark_round(dual *d, uint64_t *missed)
         d->nomem = true;
         return 0;
     }
-    ism_dual_measure_triangles(d, NULL, d->nt, miss);
+    measure_round(d, miss);
     size_t marked = 0;
     if (!d->nomem && !ism_dual_split_sides(d, miss))
         marked = ism_dual_mark_misses(d, miss, missed);
@@ -1258,6 +1327,7 @@ static void forget(dual *d)
     free(d->vleaf);
     free(d->vtwin);
     free(d->tri);
+    free(d->tmiss);
     free(d->q.q);
     ism_dual_walk_memo_free(&d->memo);
     keyed_free(&d->passed);
@@ -1270,6 +1340,8 @@ static void forget(dual *d)
     d->vleaf = NULL;
     d->vtwin = NULL;
     d->tri = NULL;
+    d->tmiss = NULL;
+    d->ntmiss = 0;
     d->nn = d->capn = d->heldn = d->capat = d->heldat = d->nv = d->capv = d->nt = d->capt = 0;
     memset(&d->q, 0, sizeof d->q);
     memset(&d->memo, 0, sizeof d->memo);

@@ -380,7 +380,7 @@ INLINE void sub_groups(const ism_dual_model *m, const ism_interval dxh[3][2], bo
 
 /* Boxes 4 q + j of n (the last repeated to fill a group): model m[k], x − c in dx[k]. */
 INLINE void many_groups(const ism_dual_model *m, const ism_interval (*dx)[3], size_t n,
-                        lane_out *out)
+                        bool every, lane_out *out)
 {
     for (size_t q = 0; 4 * q < n; q++) {
         const ism_dual_model *ms[4];
@@ -396,7 +396,7 @@ INLINE void many_groups(const ism_dual_model *m, const ism_interval (*dx)[3], si
         vi vdx[3];
         for (int a = 0; a < 3; a++)
             vdx[a] = gather(u[a]);
-        lanes_encl(&M, vdx, true, &out[q]);
+        lanes_encl(&M, vdx, every, &out[q]);
     }
 }
 
@@ -407,9 +407,9 @@ ISM_AVX2_CLONE static void sub_avx2(const ism_dual_model *m, const ism_interval 
     sub_groups(m, dxh, every, out);
 }
 ISM_AVX2_CLONE static void many_avx2(const ism_dual_model *m, const ism_interval (*dx)[3],
-                                     size_t n, lane_out *out)
+                                     size_t n, bool every, lane_out *out)
 {
-    many_groups(m, dx, n, out);
+    many_groups(m, dx, n, every, out);
 }
 #endif
 
@@ -419,9 +419,9 @@ static void sub_base(const ism_dual_model *m, const ism_interval dxh[3][2], bool
     sub_groups(m, dxh, every, out);
 }
 static void many_base(const ism_dual_model *m, const ism_interval (*dx)[3], size_t n,
-                      lane_out *out)
+                      bool every, lane_out *out)
 {
-    many_groups(m, dx, n, out);
+    many_groups(m, dx, n, every, out);
 }
 
 /* lanes_encl on m's 8 sub-boxes: sub-box k in out[k >> 2], lane k & 3. */
@@ -457,7 +457,7 @@ void ism_dual_sub_encls(const ism_dual_model *m, const double lo[3], const doubl
 }
 
 bool ism_dual_over_many(const ism_dual_model *m, const double (*lo)[3], const double (*hi)[3],
-                        size_t n, ism_interval *v2, ism_ivgrad *g, bool *ok)
+                        size_t n, bool every, ism_interval *v2, ism_ivgrad *g, bool *ok)
 {
     ism_interval dx[ISM_IVGRAD_BATCH][3];
     lane_out out[(ISM_IVGRAD_BATCH + 3) / 4]; /* many_groups: a group of 4 per started 4 */
@@ -467,10 +467,10 @@ bool ism_dual_over_many(const ism_dual_model *m, const double (*lo)[3], const do
         round_centre(&m[k], lo[k], hi[k], dx[k]);
 #if ISM_HAVE_AVX2_CLONE
     if (ISM_RUN_AVX2())
-        many_avx2(m, (const ism_interval (*)[3])dx, n, out);
+        many_avx2(m, (const ism_interval (*)[3])dx, n, every, out);
     else
 #endif
-        many_base(m, (const ism_interval (*)[3])dx, n, out);
+        many_base(m, (const ism_interval (*)[3])dx, n, every, out);
     for (size_t k = 0; k < n; k++) {
         v2[k] = out[k / 4].form[k % 4];
         g[k] = out[k / 4].g[k % 4];

@@ -84,12 +84,14 @@ void ism_dual_sub_encls(const ism_dual_model *m, const double lo[3], const doubl
 
 /* For each k < n (n <= ISM_IVGRAD_BATCH), on lo[k]..hi[k] by its model m[k], four boxes a
  * step in lanes: v2[k] = ism_dual_second_order's bounds, ok[k] = ism_dual_over's answer and
- * g[k] its enclosure (when ok), bit for bit. False, computing nothing, when n is out of
- * range. For the models ism_dual_taylor_many made; a box whose model failed there (ok false:
- * its jet may be partly written) runs in its lane all the same, and its v2, g, ok are
- * undefined: the caller reads only the others (dual_classify.c ism_dual_pre_models). */
+ * g[k] its enclosure (when ok), bit for bit. Unless every, a group of boxes 4q..4q+3 whose
+ * four forms keep f from 0 takes no enclosures (ok false there, g undefined), as
+ * ism_dual_sub_encls. False, computing nothing, when n is out of range. For the models
+ * ism_dual_taylor_many made; a box whose model failed there (ok false: its jet may be partly
+ * written) runs in its lane all the same, and its v2, g, ok are undefined: the caller reads
+ * only the others (dual_classify.c ism_dual_pre_models). */
 bool ism_dual_over_many(const ism_dual_model *m, const double (*lo)[3], const double (*hi)[3],
-                        size_t n, ism_interval *v2, ism_ivgrad *g, bool *ok);
+                        size_t n, bool every, ism_interval *v2, ism_ivgrad *g, bool *ok);
 
 /* Both in one: f and ∇f over lo..hi by its own model. */
 bool ism_dual_enclose(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],

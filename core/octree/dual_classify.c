@@ -796,32 +796,32 @@ static bool tail_tightens(const dnode *n, corner_view *v)
  * centre batch: interval_jet.h, ISM_IVGRAD_BATCH's figures). */
 #define PRE_MODELS_MIN 2
 
-void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const int *at,
-                         int nb)
+/* The models of nodes views[pick[0..np)] (np <= ISM_IVGRAD_BATCH) made at once, with their
+ * forms and enclosures, into the views (ism_dual_pre_models). */
+static void models_at_once(worker *w, corner_view *views, const int *pick, int np)
 {
     double lo[ISM_IVGRAD_BATCH][3], hi[ISM_IVGRAD_BATCH][3];
     ism_dual_model m[ISM_IVGRAD_BATCH];
     bool ok[ISM_IVGRAD_BATCH];
-    int pick[ISM_IVGRAD_BATCH], np = 0;
-    for (int k = 0; k < nb && np < ISM_IVGRAD_BATCH; k++) {
-        corner_view *v = &views[at[k]];
-        if (!v->pre_g || !tail_tightens(&kids[at[k]], v))
-            continue;
-        memcpy(lo[np], v->p[0], sizeof lo[np]);
-        memcpy(hi[np], v->p[7], sizeof hi[np]);
-        pick[np++] = at[k];
+    for (int k = 0; k < np; k++) {
+        memcpy(lo[k], views[pick[k]].p[0], sizeof lo[k]);
+        memcpy(hi[k], views[pick[k]].p[7], sizeof hi[k]);
     }
-    if (np < PRE_MODELS_MIN ||
-        !ism_dual_taylor_many(w->s.tape, w->jet, (const double (*)[3])lo,
+    if (!ism_dual_taylor_many(w->s.tape, w->jet, (const double (*)[3])lo,
                               (const double (*)[3])hi, (size_t)np, m, ok))
         return;
     /* the tails' first enclosures of these models, in lanes (the form alone decides for
-       some: taken anyway, a group of four lanes costing about one box's form and enclosure) */
+       some: taken anyway, a group of four lanes costing about one box's form and enclosure)
+       — but for a group of four whose forms all keep f from 0 when every node picked has
+       corners of one sign: each such tail then answers from its form (empty_proven) and
+       never reads the enclosure; a node with both signs reads it (tighten) */
     ism_interval v2[ISM_IVGRAD_BATCH];
     ism_ivgrad over[ISM_IVGRAD_BATCH];
-    bool over_ok[ISM_IVGRAD_BATCH];
+    bool over_ok[ISM_IVGRAD_BATCH], every = false;
+    for (int k = 0; k < np; k++)
+        every |= views[pick[k]].neg != 0 && views[pick[k]].neg != 8;
     bool forms = ism_dual_over_many(m, (const double (*)[3])lo, (const double (*)[3])hi,
-                                    (size_t)np, v2, over, over_ok);
+                                    (size_t)np, every, v2, over, over_ok);
     for (int k = 0; k < np; k++) {
         corner_view *v = &views[pick[k]];
         v->model = m[k];
@@ -834,6 +834,24 @@ void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const
             v->pre_over_ok = over_ok[k];
         }
     }
+}
+
+void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const int *at,
+                         int nb)
+{
+    int pick[ISM_IVGRAD_BATCH], np = 0;
+    for (int k = 0; k < nb; k++) {
+        corner_view *v = &views[at[k]];
+        if (!v->pre_g || !tail_tightens(&kids[at[k]], v))
+            continue;
+        pick[np++] = at[k];
+        if (np == ISM_IVGRAD_BATCH) {
+            models_at_once(w, views, pick, np);
+            np = 0;
+        }
+    }
+    if (np >= PRE_MODELS_MIN)
+        models_at_once(w, views, pick, np);
 }
 
 int ism_dual_classify_tail(dual *d, worker *w, dnode *n, corner_view *v)

@@ -509,6 +509,7 @@ static bool fan_helps(dual *d, const uint32_t *tri)
 void ism_dual_emit_quads(dual *d)
 {
     size_t nq = d->q.n;
+    d->ntmiss = 0; /* tmiss speaks of no triangles until this round's are made */
     uint32_t *diag = malloc((nq ? nq : 1) * 4 * sizeof *diag);
     uint32_t *first = malloc((nq ? nq : 1) * sizeof *first), *list = NULL, *fq = NULL;
     uint8_t *fan = calloc(nq ? nq : 1, 1), *miss = NULL;
@@ -564,6 +565,10 @@ void ism_dual_emit_quads(dual *d)
         }
     if (ok && nl) /* nl: list's entries written (none: nothing to measure) */
         ism_dual_measure_triangles(d, list, nl, miss);
+    /* what was measured, for mark_round, by triangle; the fans below add 2 a quad at most */
+    uint8_t *tm = ok ? calloc(d->nt + 2 * nq + 1, 1) : NULL;
+    for (size_t k = 0; tm && k < nl; k++)
+        tm[list[k]] = (uint8_t)(TMISS_KNOWN | miss[k]);
     for (size_t q = 0, k = 0; ok && q < nq; q++)
         if (d->q.q[4 * q + 3] != UINT32_MAX && !fan[q]) {
             fan[q] = (miss[k] || miss[k + 1]) && fan_helps(d, &d->tri[3 * first[q]]);
@@ -600,26 +605,47 @@ void ism_dual_emit_quads(dual *d)
     if (ok && (nf || d->fans.n)) {
         size_t nt = d->nt;
         uint32_t *kept = malloc((nt ? nt : 1) * 3 * sizeof *kept);
+        uint8_t *kept_tm = tm ? malloc(nt ? nt : 1) : NULL;
         ok = kept != NULL;
         if (ok)
             memcpy(kept, d->tri, nt * 3 * sizeof *kept);
+        if (kept_tm)
+            memcpy(kept_tm, tm, nt);
+        else {
+            free(tm);
+            tm = NULL;
+        }
         d->nt = 0;
         for (size_t q = 0, t = 0; ok && q < nq; q++) {
             const uint32_t *u = &d->q.q[4 * q];
             size_t own = u[3] == UINT32_MAX ? 1 : 2;
             if (fan[q]) {
-                for (int j = 0; ok && j < 4; j++)
+                for (int j = 0; ok && j < 4; j++) {
+                    if (tm)
+                        tm[d->nt] = 0; /* a fan's triangle: not measured yet */
                     ok = add_tri(d, u[j], u[(j + 1) % 4], first[q]);
+                }
             } else
-                for (size_t j = 0; ok && j < own; j++)
+                for (size_t j = 0; ok && j < own; j++) {
+                    if (tm)
+                        tm[d->nt] = kept_tm[t + j];
                     ok = add_tri(d, kept[3 * (t + j)], kept[3 * (t + j) + 1],
                                  kept[3 * (t + j) + 2]);
+                }
             t += own;
         }
         free(kept);
+        free(kept_tm);
     }
     if (!ok)
         d->nomem = true;
+    if (ok && tm) { /* mark_round's: this round's triangles as they now stand */
+        free(d->tmiss);
+        d->tmiss = tm;
+        d->ntmiss = d->nt;
+        tm = NULL;
+    }
+    free(tm);
     free(diag);
     free(ddist);
     free(first);

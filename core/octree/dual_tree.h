@@ -117,6 +117,11 @@ typedef struct dual {
     size_t nv, capv;
     uint32_t *tri;    /* this round's triangles */
     size_t nt, capt;
+    /* The miss masks (ism_dual_measure_triangles') of this round's triangles that
+     * ism_dual_emit_quads measured, each | TMISS_KNOWN, 0 for the others (fans' triangles);
+     * they speak of tri while ntmiss == nt (mark_round then measures only the others) */
+    uint8_t *tmiss;
+    size_t ntmiss;
     quads q;          /* this round's quads (ism_dual_make_quads) */
     walk_memo memo;   /* the last round's put-off walk calls and their quads */
     keyed passed;       /* triangles (tri_key) that met E */
@@ -137,6 +142,9 @@ typedef struct dual {
     bool bad, nomem, too_big;
     enum ism_dual_reason why; /* the first reason bad was set for (mesher.h) */
 } dual;
+
+/* dual.tmiss: the triangle's mask was measured this round (masks use bits 0-2). */
+#define TMISS_KNOWN 0x80
 
 /* The arrays below start at ISM_DUAL_FIRST_ROOM elements (ism_grow's first allocation). */
 #define ISM_DUAL_FIRST_ROOM 64

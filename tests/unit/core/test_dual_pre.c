@@ -67,6 +67,30 @@ static void stale_view_classified(rig *r, const corner_view *stale, const dnode 
                  "a view the pre-pass left, reused for another node: another kind");
 }
 
+/* The lattice origins of the nodes of a level whose box reaches the torus's tube (its centre
+ * within half its diagonal, 0.87 of a side, of the tube), in z, y, x order, malloc'd; their
+ * number into *n. */
+static int32_t (*tube_nodes(const rig *r, int level, int *n))[3]
+{
+    int32_t step = ism_grid_cell_steps(&r->r.d.g, level);
+    int cells = 1 << level;
+    double size = ism_grid_cell_size(&r->r.d.g, level);
+    int32_t (*q)[3] = malloc((size_t)cells * cells * cells * sizeof *q);
+    cr_assert(q);
+    *n = 0;
+    for (int z = 0; z < cells; z++)
+        for (int y = 0; y < cells; y++)
+            for (int x = 0; x < cells; x++) {
+                int32_t at[3] = {x * step, y * step, z * step};
+                double c[3];
+                for (int a = 0; a < 3; a++)
+                    c[a] = ism_grid_coord(&r->r.d.g, a, at[a] + step / 2);
+                if (pf_ring_torus_dist(c) <= 0.87 * size)
+                    memcpy(q[(*n)++], at, sizeof at);
+            }
+    return q;
+}
+
 /* The children of the node at q, level, both ways — and a third, with corner_view.corners
  * set beforehand (split_task's path) instead of 0 (classify_head counting them): the same
  * kinds; returns how many children took a model made at once. */
@@ -168,22 +192,12 @@ Test(dual_pre, children_classified_at_once_as_one_by_one)
         dual_rig_set_up(&r.r, t, i, DEPTH, E);
         int made = 0, nodes = 0;
         for (int level = 3; level <= 5; level++) {
-            int32_t step = ism_grid_cell_steps(&r.r.d.g, level);
-            int cells = 1 << level;
-            double size = ism_grid_cell_size(&r.r.d.g, level);
-            for (int z = 0; z < cells; z++)
-                for (int y = 0; y < cells; y++)
-                    for (int x = 0; x < cells; x++) {
-                        int32_t q[3] = {x * step, y * step, z * step};
-                        double c[3];
-                        for (int a = 0; a < 3; a++)
-                            c[a] = ism_grid_coord(&r.r.d.g, a, q[a] + step / 2);
-                        /* boxes reaching the tube (half their diagonal: 0.87 of a side) */
-                        if (pf_ring_torus_dist(c) > 0.87 * size)
-                            continue;
-                        made += compare_children(&r, q, level, i);
-                        nodes++;
-                    }
+            int n;
+            int32_t (*q)[3] = tube_nodes(&r, level, &n);
+            for (int k = 0; k < n; k++)
+                made += compare_children(&r, q[k], level, i);
+            nodes += n;
+            free(q);
         }
         /* the batch path must carry the comparison: models made at once in at least a
          * quarter of the splits (1,672 in 3,056 here on main, the ratio ~0.55 in each
@@ -198,6 +212,102 @@ Test(dual_pre, children_classified_at_once_as_one_by_one)
         cr_expect_gt(r.stale_differ, nodes, "placement %d: %d kept answers another child's "
                                             "differs from, in %d splits", i, r.stale_differ,
                      nodes);
+        dual_rig_tear_down(&r.r);
+    }
+    ism_tape_free(t);
+}
+
+/* Nodes whose children one test call classifies together, as split_task's SPLIT_CHUNK. */
+#define MANY 3
+
+/* The children of the nq <= MANY nodes at q[0..nq) (level) classified together, as split_task
+ * does across its nodes (dual.c kid_kinds: every head, the natural enclosures
+ * ISM_IVGRAD_BATCH at a time, then ism_dual_pre_models over all of them at once), against each
+ * child alone: the same kind and the same model to the bit. And every child whose tail would
+ * tighten (ism_dual_pre_models' answer kept in its view: pre_open) took its model at once,
+ * but for a last batch of one (PRE_MODELS_MIN): the picks past the first ISM_IVGRAD_BATCH
+ * are made too. Returns how many children took a model made at once. */
+static int compare_many(rig *r, const int32_t (*q)[3], int nq, int level, int placement)
+{
+    dnode kids[8 * MANY], alone[8 * MANY];
+    corner_view views[8 * MANY], solo[8 * MANY];
+    int half = ism_grid_cell_steps(&r->r.d.g, level + 1), kind[8 * MANY], at[8 * MANY], nb = 0;
+    for (int i = 0; i < 8 * nq; i++) {
+        int c = i % 8;
+        int32_t k[3] = {q[i / 8][0] + (c & 1) * half, q[i / 8][1] + (c >> 1 & 1) * half,
+                        q[i / 8][2] + (c >> 2 & 1) * half};
+        dual_rig_node(&r->r, k, level + 1, &kids[i], &views[i]);
+        alone[i] = kids[i];
+        solo[i] = views[i];
+    }
+    for (int i = 0; i < 8 * nq; i++) {
+        kind[i] = ism_dual_classify_head(&r->r.d, &r->r.w, &kids[i], &views[i]);
+        if (kind[i] == UNDECIDED && tail_wants_g(&r->r.d, &views[i]))
+            at[nb++] = i;
+    }
+    int nat = 0;
+    for (int b = 0; nb - b >= 2; b += ISM_IVGRAD_BATCH) {
+        int m = nb - b < ISM_IVGRAD_BATCH ? nb - b : ISM_IVGRAD_BATCH;
+        ism_interval box[ISM_IVGRAD_BATCH][3];
+        ism_ivgrad g[ISM_IVGRAD_BATCH];
+        for (int k = 0; k < m; k++)
+            ism_dual_node_box(&views[at[b + k]], box[k]);
+        cr_assert(ism_eval_interval_grad_batch(r->r.w.s.tape, r->r.w.jet,
+                                               (const ism_interval (*)[3])box, (size_t)m, g));
+        for (int k = 0; k < m; k++) {
+            views[at[b + k]].g = g[k];
+            views[at[b + k]].pre_g = true;
+        }
+        nat = b + m;
+    }
+    int made = 0, picks = 0;
+    if (nat) {
+        ism_dual_pre_models(&r->r.w, kids, views, at, nat);
+        for (int k = 0; k < nat; k++) {
+            made += views[at[k]].pre_model;
+            picks += views[at[k]].pre_open_known && views[at[k]].pre_open;
+        }
+    }
+    int want_made = picks % ISM_IVGRAD_BATCH == 1 ? picks - 1 : picks;
+    cr_assert_eq(made, want_made, "placement %d, level %d: %d of %d picks made at once",
+                 placement, level, made, picks);
+    for (int i = 0; i < 8 * nq; i++) {
+        if (kind[i] == UNDECIDED)
+            kind[i] = ism_dual_classify_tail(&r->r.d, &r->r.w, &kids[i], &views[i]);
+        int want = ism_dual_classify(&r->r.d, &r->r.w, &alone[i], &solo[i]);
+        cr_assert_eq(kind[i], want, "placement %d, level %d, node %d child %d: %d together, "
+                                    "%d alone", placement, level, i / 8, i % 8, kind[i], want);
+        cr_assert_eq(views[i].have_model, solo[i].have_model);
+        if (solo[i].have_model)
+            cr_assert(!memcmp(&views[i].model, &solo[i].model, sizeof solo[i].model),
+                      "placement %d, level %d, node %d child %d: another model", placement,
+                      level, i / 8, i % 8);
+    }
+    return made;
+}
+
+Test(dual_pre, children_of_several_nodes_classified_together_as_one_by_one)
+{
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    for (int i = pf_first_box(); i < 3; i++) {
+        rig r = {.stale_kept = 0};
+        dual_rig_set_up(&r.r, t, i, DEPTH, E);
+        int made = 0, batches = 0;
+        for (int level = 3; level <= 4; level++) {
+            int n;
+            int32_t (*q)[3] = tube_nodes(&r, level, &n);
+            for (int k = 0; k < n; k += MANY) {
+                int m = compare_many(&r, (const int32_t (*)[3])q + k, n - k < MANY ? n - k : MANY,
+                                     level, i);
+                made += m;
+                batches += m > ISM_IVGRAD_BATCH;
+            }
+            free(q);
+        }
+        /* the calls must carry picks past one batch of models, or the loop past the first
+           ISM_IVGRAD_BATCH is not tested */
+        cr_expect_gt(batches, 10, "placement %d: %d calls made more than %d models (%d in all)",
+                     i, batches, ISM_IVGRAD_BATCH, made);
         dual_rig_tear_down(&r.r);
     }
     ism_tape_free(t);
