@@ -951,10 +951,11 @@ static bool open_slot(expansion *e, int m, pre_slot *sl)
  * In one ism_eval_interval_grad_lanes (or _batch without kinks), bit for bit the one-by-one
  * passes (classify's kept pass; centre_at's), into each slot's pre_grad; the jets
  * smooth_tests then takes over the boxes take the batch's records as they took the kept
- * pass's (pre_jets, right after). Cheaper than one by one from 2 lanes up (interval_jet.h,
- * ISM_IVGRAD_BATCH's figures). With min, max or abs the lanes list each box's kinks as
- * classify's pass would (ism_eval_interval_grad_lanes). Without centres (a parent without a
- * model: no centre test; only on tapes with kinks) the children's centres are left to
+ * pass's (pre_jets or box_jets, right after). Cheaper than one by one from 2 lanes up
+ * (interval_jet.h, ISM_IVGRAD_BATCH's figures). With min, max or abs the lanes list each box's
+ * kinks as classify's pass would (ism_eval_interval_grad_lanes). Without centres: on tapes
+ * without kinks round_take, which takes the centres needed afterwards (centres_take); on tapes
+ * with kinks a parent without a model (no centre test), whose children's centres are left to
  * centre_at: few of those children reach smooth_tests (Barth at E 0.0259: with the centres
  * 1,287.5M instructions, without 1,273.1M, one by one 1,284.2M). Whether they were taken. */
 static bool pre_gradients(const search *s, worker *w, const pre_slot *sl, size_t n, bool centres)
@@ -988,19 +989,35 @@ static bool pre_gradients(const search *s, worker *w, const pre_slot *sl, size_t
     return true;
 }
 
-/* After pre_gradients with centres over sl[0..n): the jets over the boxes of those whose
- * smooth_tests will take one (classify's and smooth_tests' tests on what pre_gradients took,
- * the same functions: no free kink, ∇F may vanish, first_order_holds), in one
- * ism_eval_interval_jet_lanes (bit for bit the one-by-one jets; Hessians alone from the
- * batch's records on tapes without kinks), into their pre_grad's jet; a lone one
- * (PRE_JETS_MIN) by ism_eval_interval_jet, now: on tapes without kinks from its record,
- * which only stands until the next pass (with kinks the pass keeps no record, and the order
- * does not matter). Klein at E 0.00327: the search's jets ~45M -> ~30M instructions,
- * 157.9M -> 146.0M in all. */
+/* The jets over box[0..n) (n <= ISM_IVGRAD_BATCH) into kid[k]'s jet, bit for bit the
+ * one-by-one jets: in one ism_eval_interval_jet_lanes (Hessians alone from the last batched
+ * pass's records on tapes without kinks, when every box's lies in one group of its lanes); a
+ * lone one (PRE_JETS_MIN) by ism_eval_interval_jet, now: on tapes without kinks from its
+ * record, which only stands until the next pass (with kinks the pass keeps no record, and the
+ * order does not matter). */
+static void jets_into(const search *s, worker *w, const ism_interval (*box)[3], pre_grad **kid,
+                      size_t n)
+{
+    ism_ivjet jet[ISM_IVGRAD_BATCH];
+    if (!n)
+        return;
+    if (n < PRE_JETS_MIN)
+        ism_eval_interval_jet(s->t, w->jw, box[0], NULL, NULL, &jet[0]);
+    else if (!ism_eval_interval_jet_lanes(s->t, w->jw, box, n, jet))
+        return;
+    for (size_t k = 0; k < n; k++) {
+        kid[k]->jet = jet[k];
+        kid[k]->jet_ok = true;
+    }
+}
+
+/* After pre_gradients with centres over sl[0..n) (tapes with kinks: batch_kinked): the jets
+ * (jets_into) over the boxes of those whose smooth_tests will take one (classify's and
+ * smooth_tests' tests on what pre_gradients took, the same functions: no free kink, ∇F may
+ * vanish, first_order_holds). */
 static void pre_jets(const search *s, worker *w, const pre_slot *sl, size_t ns)
 {
     ism_interval box[ISM_IVGRAD_BATCH][3];
-    ism_ivjet jet[ISM_IVGRAD_BATCH];
     pre_grad *kid[ISM_IVGRAD_BATCH];
     size_t n = 0;
     for (size_t i = 0; i < ns && n < ISM_IVGRAD_BATCH; i++) {
@@ -1017,17 +1034,7 @@ static void pre_jets(const search *s, worker *w, const pre_slot *sl, size_t ns)
         memcpy(box[n], sl[i].x, sizeof box[n]);
         kid[n++] = p;
     }
-    if (!n)
-        return;
-    if (n < PRE_JETS_MIN) /* one by one, now: without kinks from the pass's record, which the
-                             next pass overwrites; with kinks there is none (order free) */
-        ism_eval_interval_jet(s->t, w->jw, box[0], NULL, NULL, &jet[0]);
-    else if (!ism_eval_interval_jet_lanes(s->t, w->jw, (const ism_interval (*)[3])box, n, jet))
-        return;
-    for (size_t k = 0; k < n; k++) {
-        kid[k]->jet = jet[k];
-        kid[k]->jet_ok = true;
-    }
+    jets_into(s, w, (const ism_interval (*)[3])box, kid, n);
 }
 
 /* p's eight children's F intervals in one batch, screened; then, when p has a model, f at
@@ -1119,24 +1126,99 @@ static void batch_kinked(const search *s, worker *w, expansion *e)
         pre_gradients(s, w, sl, n, false);
 }
 
+/* Boxes of one group of a batched gradient pass (interval_jet.h: ISM_IVGRAD_BATCH boxes run
+ * as two groups of 4): the jets from a pass's records take the boxes of one group at a time. */
+#define GRAD_GROUP (ISM_IVGRAD_BATCH / 2)
+
+/* After pre_gradients over boxes alone (tapes without kinks: round_take), sl[0..ns) one group
+ * of its boxes, no other batched pass since: the jets (jets_into, from the pass's records)
+ * over those whose ∇F over the box may vanish (classify's test on what pre_gradients took),
+ * their slots moved to the front of sl; returns how many. Taken before the centres'
+ * gradients (centres_take), so also for the cells first_order_holds then drops, which it
+ * rarely does on a smooth tape (Klein at E 0.0141 and the torus: none). */
+static size_t box_jets(const search *s, worker *w, pre_slot *sl, size_t ns)
+{
+    ism_interval box[GRAD_GROUP][3];
+    pre_grad *kid[GRAD_GROUP];
+    size_t n = 0;
+    for (size_t i = 0; i < ns; i++)
+        if (sl[i].pre->ok && grad_may_vanish(sl[i].pre->g.d)) {
+            memcpy(box[n], sl[i].x, sizeof box[n]);
+            kid[n] = sl[i].pre;
+            sl[n++] = sl[i];
+        }
+    jets_into(s, w, (const ism_interval (*)[3])box, kid, n);
+    return n;
+}
+
+/* The gradients at the centres of the cells sl[0..n) (n <= ISM_IVGRAD_BATCH) in one
+ * ism_eval_interval_grad_batch over their centres as point boxes (centre_at's, bit for bit),
+ * into each slot's pre_grad at. */
+static void centres_take(const search *s, worker *w, const pre_slot *sl, size_t n)
+{
+    ism_interval box[ISM_IVGRAD_BATCH][3];
+    ism_ivgrad g[ISM_IVGRAD_BATCH];
+    for (size_t k = 0; k < n; k++) {
+        double c[3];
+        centre_of(sl[k].x, c);
+        _Pragma("GCC unroll 3") for (int a = 0; a < 3; a++)
+            box[k][a] = iv(c[a], c[a]);
+    }
+    if (!n || !ism_eval_interval_grad_batch(s->t, w->jw, (const ism_interval (*)[3])box, n, g))
+        return;
+    for (size_t k = 0; k < n; k++) {
+        sl[k].pre->at = g[k];
+        sl[k].pre->at_ok = true;
+    }
+}
+
+/* A task's batches on a tape without kinks (batch_smooth): the open children's boxes in
+ * rounds of ISM_IVGRAD_BATCH, the centres of those whose ∇F may vanish (the only ones
+ * smooth_tests takes a centre of) gathered across rounds. */
+typedef struct smooth_rounds {
+    pre_slot box[ISM_IVGRAD_BATCH], centre[ISM_IVGRAD_BATCH];
+    size_t nbox, ncentre;
+} smooth_rounds;
+
+/* One round: its boxes' gradients in one pass, each group's jets right after it (before the
+ * next pass overwrites its records), then their centres queued, a full queue taken. */
+static void round_take(const search *s, worker *w, smooth_rounds *r)
+{
+    if (!r->nbox || !pre_gradients(s, w, r->box, r->nbox, false)) {
+        r->nbox = 0;
+        return;
+    }
+    size_t kept[ISM_IVGRAD_BATCH / GRAD_GROUP], groups = 0;
+    for (size_t a = 0; a < r->nbox; a += GRAD_GROUP, groups++)
+        kept[groups] = box_jets(s, w, r->box + a,
+                                r->nbox - a < GRAD_GROUP ? r->nbox - a : GRAD_GROUP);
+    for (size_t g = 0; g < groups; g++)
+        for (size_t k = 0; k < kept[g]; k++) {
+            r->centre[r->ncentre++] = r->box[g * GRAD_GROUP + k];
+            if (r->ncentre == ISM_IVGRAD_BATCH) {
+                centres_take(s, w, r->centre, r->ncentre);
+                r->ncentre = 0;
+            }
+        }
+    r->nbox = 0;
+}
+
 /* The batches of a task's parents e[0..n) on a tape without kinks: the children with a
- * parent with a model, across parents, in rounds of ISM_IVGRAD_BATCH / 2 with their centres,
- * each round's jets taken before the next round's pass overwrites its records (a parent's
- * own rounds left ~2 children a round on Klein). Children of parents without a model are
+ * parent with a model, across parents, in rounds of ISM_IVGRAD_BATCH boxes alone (round_take),
+ * and the centres' gradients only for the children whose ∇F over the box may vanish: the
+ * others' centres are never read (Klein at E 0.0141: 1,726 of the 4,211 boxes). Before,
+ * every box went with its centre, 4 + 4 lanes a pass. Children of parents without a model are
  * taken one by one (on smooth tapes the torus's search paid more for their batches). */
 static void batch_smooth(const search *s, worker *w, expansion *e, size_t n)
 {
-    pre_slot sl[ISM_IVGRAD_BATCH / 2];
-    size_t k = 0;
+    smooth_rounds r;
+    r.nbox = r.ncentre = 0;
     for (size_t i = 0; i < n; i++)
         for (int m = 0; e[i].model && m < 8; m++)
-            if (open_slot(&e[i], m, &sl[k]) && ++k == ISM_IVGRAD_BATCH / 2) {
-                if (pre_gradients(s, w, sl, k, true))
-                    pre_jets(s, w, sl, k);
-                k = 0;
-            }
-    if (pre_gradients(s, w, sl, k, true))
-        pre_jets(s, w, sl, k);
+            if (open_slot(&e[i], m, &r.box[r.nbox]) && ++r.nbox == ISM_IVGRAD_BATCH)
+                round_take(s, w, &r);
+    round_take(s, w, &r);
+    centres_take(s, w, r.centre, r.ncentre);
 }
 
 /* Each child of e finished in order. */

@@ -6,7 +6,9 @@
  * for bit, and the batch ran (grads_batched > 0) and classify read every record it took
  * (grads_batch_read: a child batched that the centre test then drops wastes its lanes). A
  * batch record given to the wrong child or the box's gradient read for the centre's (g[k] /
- * g[n + k]) would move a box or a count here. The cross-cap (pinch points and a
+ * g[n + k]) would move a box or a count here; so would, on tapes without kinks (boxes 8 to a
+ * pass, then the centres of those whose gradient may vanish: search.c round_take), a centre's
+ * gradient or a jet given to another slot. The cross-cap (pinch points and a
  * double segment: cells kept to the finest level along it), Kummer's 16 nodes and Barth's
  * sextic in its ball (kinks listed in the lanes), in three placements (pf_sweep_box). */
 #include <criterion/criterion.h>
