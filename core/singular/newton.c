@@ -79,7 +79,7 @@ typedef struct run {
 
 static void run_begin(run *u, double p[3], const ism_newton_opts *o)
 {
-    *u = (run){ .p = p, .o = o, .r = { false, 0, INFINITY, { 0 }, { 0 } } };
+    *u = (run){ .p = p, .o = o, .r = { false, 0, INFINITY, { 0 }, { 0 }, { 0 } } };
 }
 
 /* Whether the run goes on to a step from the jet at u->p: false when it ended on that jet,
@@ -128,8 +128,10 @@ static bool run_step(run *u)
 static void run_took_jet(run *u)
 {
     u->r.grad_norm = ism_norm3(u->r.grad);
-    if (u->r.iterations == 0)
+    if (u->r.iterations == 0) {
+        memcpy(u->r.start_hess, u->r.hess, sizeof u->r.start_hess);
         return;
+    }
     if (!(u->r.grad_norm < INFINITY)) {
         u->done = true;
         return;

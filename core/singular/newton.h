@@ -31,6 +31,7 @@ typedef struct ism_newton_result {
     int iterations;
     double grad_norm; /* |∇f| at the final point */
     double grad[3], hess[6]; /* ism_eval_hessian's ∇f and H at the final point */
+    double start_hess[6];    /* ... and H at the start point (the run's first jet) */
 } ism_newton_result;
 
 typedef struct ism_newton_opts {

@@ -80,6 +80,12 @@ static void expect_lanes_as_runs(const ism_tape *t, const char *name, const doub
                           && !memcmp(r.hess, lr[i].hess, sizeof r.hess),
                       "%s box %d run %d: %d/%d iterations, converged %d/%d", name, w, i,
                       r.iterations, lr[i].iterations, r.converged, lr[i].converged);
+            /* the Hessian at the start, both ways, is the one taken there alone */
+            double g0[3], h0[6];
+            ism_eval_hessian(t, ws, s.p[i][0], s.p[i][1], s.p[i][2], g0, h0);
+            cr_expect(!memcmp(h0, r.start_hess, sizeof h0)
+                          && !memcmp(h0, lr[i].start_hess, sizeof h0),
+                      "%s box %d run %d: the Hessian at the start", name, w, i);
             converged += r.converged;
             left += !r.converged;
             most = r.iterations > most ? r.iterations : most;

@@ -16,6 +16,7 @@
 #include "poly_fixture.h"
 #include "test_eval_surfaces.h"
 #include "core/singular/search.h"
+#include "core/util/sym3.h"
 
 /* The search of t over box at depth, batched or not, into l (asserted complete). */
 static void search(const ism_tape *t, const double box[6], int depth, bool batch, ism_locus *l)
@@ -83,6 +84,32 @@ Test(search_batch, kummer_16_nodes_batched_as_one_by_one)
     ism_tape_free(t);
 }
 
+/* The candidates of l that Newton left at their centre (neither projected nor unique): each
+ * ranked by the Hessian there, evaluated here (search.c centre_rank reads it from the run's
+ * first jet); returns how many. */
+static size_t centres_ranked(const ism_tape *t, const ism_locus *l, const char *name, int w)
+{
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    cr_assert_not_null(ws);
+    size_t n = 0;
+    for (size_t i = 0; i < l->nboxes; i++) {
+        const ism_lbox *b = &l->boxes[i];
+        if (b->flags & (ISM_LBOX_PROJECTED | ISM_LBOX_UNIQUE))
+            continue;
+        double g[3], h[6], eig[3];
+        ism_eval_hessian(t, ws, b->q[0], b->q[1], b->q[2], g, h);
+        ism_sym3_eigen(h, eig, NULL);
+        for (int k = 0; k < 3; k++)
+            cr_expect(b->q[k] == b->lo[k] + 0.5 * (b->hi[k] - b->lo[k]),
+                      "%s box %d: candidate %zu not at its centre", name, w, i);
+        cr_expect_eq(b->rank, ism_sing_rank(eig, l->hessian_scale),
+                     "%s box %d: candidate %zu ranked %d at its centre", name, w, i, b->rank);
+        n++;
+    }
+    ism_eval_ws_free(ws);
+    return n;
+}
+
 /* Barth's sextic in its ball: a max at the top, so classify lists kinks — the lanes take
  * them (ism_eval_interval_grad_lanes), the children of parents without a model in batches of
  * their boxes alone, and a kink at the top is read from the batch's lanes. */
@@ -91,5 +118,25 @@ Test(search_batch, barth_with_kinks_batched_as_one_by_one)
     ism_tape *t = pf_compile(&pf_barth_sextic);
     const double box[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6};
     expect_same(t, "barth-sextic", box, 6 - pf_quick());
+    ism_tape_free(t);
+}
+
+/* Barth's sextic in its ball, the candidates Newton does not converge in (the sextic's
+ * gradient interval holds 0 where it has no zero): ranked at their centres as by a Hessian
+ * taken there, in the three placements. */
+Test(search_batch, barth_unconverged_ranked_at_their_centres)
+{
+    ism_tape *t = pf_compile(&pf_barth_sextic);
+    const double base[6] = {-1.6, -1.6, -1.6, 1.6, 1.6, 1.6};
+    int depth = 6 - pf_quick();
+    for (int w = pf_first_box() - 1; w < 2; w++) {
+        double box[6];
+        pf_sweep_box(base, depth, w, box);
+        ism_locus l;
+        search(t, box, depth, true, &l);
+        cr_expect_gt(centres_ranked(t, &l, "barth-sextic", w), 0,
+                     "barth-sextic box %d: every candidate projected", w);
+        ism_locus_free(&l);
+    }
     ism_tape_free(t);
 }
