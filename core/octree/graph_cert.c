@@ -60,6 +60,15 @@ bool ism_graph_from_enclosure(const ism_ivgrad *g)
     return slope_sign(g, d) != 0;
 }
 
+/* Whether the enclosure g of ∇f holds 0 (along every axis): then no direction clears it. */
+static bool holds_zero(const ism_ivgrad *g)
+{
+    for (int a = 0; a < 3; a++)
+        if (!(g->d[a].lo <= 0 && g->d[a].hi >= 0))
+            return false;
+    return true;
+}
+
 /* Steps of the search for a shared direction (shared_direction): each moves d toward the
  * point of the enclosures' hull nearest 0, which is reached (or shown absent) in a few steps
  * where the boxes lie well clear of 0 — the nodes worth certifying. Barth's sextic at E
@@ -77,6 +86,9 @@ bool ism_graph_from_enclosure(const ism_ivgrad *g)
  * pick a candidate, the test proves it. */
 static bool shared_direction(const ism_ivgrad *g, int m, double d[3])
 {
+    for (int c = 0; c < m; c++)
+        if (holds_zero(&g[c]))
+            return false; /* 0 in one box is in the hull: no step can help (most refusals) */
     d[0] = d[1] = d[2] = 0;
     for (int c = 0; c < m; c++)
         add_midpoint(&g[c], d);
@@ -165,6 +177,11 @@ static bool sub_box_slopes(const ism_tape *t, const ism_ivjet_ws *jet,
     return true;
 }
 
+/* Halves evaluated in one pass of the lanes: their group width (interval_jet.h, four boxes
+ * a group), so that a proof a half of the first group ends pays no second pass. Barth's
+ * sextic at E 0.0259: 8 a pass 647.1M instructions, 4 a pass 645.9M (same mesh). */
+#define HALVES_GROUP 4
+
 /* The box halved along each axis: sub-box k takes the upper half along a where bit a of k
  * is set. */
 static void halve(const ism_interval box[3], ism_interval sub[8][3])
@@ -192,15 +209,24 @@ static bool graph_on_halves(const ism_tape *t, ism_ivjet_ws *jet, const ism_inte
     uint32_t nk[8];
     int m = 0;
     halve(box, sub);
-    *intervals += 8;
-    bool lanes = ism_eval_interval_grad_lanes(t, jet, (const ism_interval (*)[3])sub, 8, f, nk);
-    for (int k = 0; k < 8; k++) {
-        /* one by one (a tape the lanes do not take), each box's pass right before its
-           pieces are read */
-        size_t n = lanes ? (nk[k] == UINT32_MAX ? (size_t)-1 : nk[k])
-                         : ism_eval_interval_grad(t, jet, sub[k], NULL, NULL, &f[k]);
-        if (n == (size_t)-1 || !sub_box_slopes(t, jet, sub[k], &f[k], n, g, &m))
-            return false;
+    /* four halves a pass (the lanes' group), each group's pieces read before the next pass;
+       a half whose enclosure holds 0 ends the proof before the second group is evaluated */
+    for (int q = 0; q < 8; q += HALVES_GROUP) {
+        *intervals += HALVES_GROUP;
+        bool lanes = ism_eval_interval_grad_lanes(t, jet, (const ism_interval (*)[3])(sub + q),
+                                                  HALVES_GROUP, f + q, nk + q);
+        for (int k = q; k < q + HALVES_GROUP; k++) {
+            /* one by one (a tape the lanes do not take), each box's pass right before its
+               pieces are read */
+            size_t n = lanes ? (nk[k] == UINT32_MAX ? (size_t)-1 : nk[k])
+                             : ism_eval_interval_grad(t, jet, sub[k], NULL, NULL, &f[k]);
+            int had = m;
+            if (n == (size_t)-1 || !sub_box_slopes(t, jet, sub[k], &f[k], n, g, &m))
+                return false;
+            for (int c = had; c < m; c++)
+                if (holds_zero(&g[c]))
+                    return false; /* as shared_direction would answer */
+        }
     }
     double d[3];
     return m == 0 || shared_direction(g, m, d);
