@@ -37,9 +37,8 @@ bool ism_graph_certified(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3
 
 /* ism_graph_certified from the whole box's enclosures alone (no halves): ∇f there clearing 0
  * along one direction. For a caller whose polygons need more than one graph: plot_test.c's
- * graph_node_passes, whose nodes may be many E across — with the halves the horn cyclide at E
- * 0.064 (depth 3:8, own box) passed nodes up to 4 across that were one graph (sampled along
- * d, none met twice) but left 4 + 4 non-manifold artefacts (test_polygonise_thin.c). */
+ * graph_node_passes past GRAPH_HALVES_ERRORS (there: the horn cyclide's curved nodes, one
+ * graph each, whose polygons left artefacts). */
 bool ism_graph_certified_whole(const ism_tape *t, ism_ivjet_ws *jet, const double lo[3],
                                const double hi[3], uint64_t *intervals);
 

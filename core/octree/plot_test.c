@@ -108,6 +108,18 @@
  * cube's planes meet at exactly 90° and are PLANE_PIECE_COS's, with no such need. */
 #define CURVED_CREASE_COS 0.0
 
+/* graph_node_passes proves its node one graph on the node's halves (ism_graph_certified) up
+ * to this many bounds across its smallest side, bigger nodes by the whole box's enclosures
+ * alone (ism_graph_certified_whole). The halves prove curved nodes many E across: the horn
+ * cyclide at E 0.064 (depth 3:8, own box) with the halves up to 32 E passed nodes 2 across,
+ * each one graph (sampled along its d: no line met it twice), whose polygons the tests after
+ * the proof do not follow (4 + 4 non-manifold artefacts); up to 16 E none. bench_error, one
+ * thread, callgrind ism_mesh_surface, whole enclosures only -> halves up to 16 E: Klein 0.0141
+ * 541.8M -> 492.9M instructions, 17,546 -> 16,704 triangles, max_c 0.0100, max_m 0.0140778
+ * both; Barth 0.00389 1,721.1M -> 1,716.8M, 72,696 -> 70,632, max_c 0.00317, max_m 0.00388
+ * both; Barth 0.0259 24,344 both (its nodes pass elsewhere). */
+#define GRAPH_HALVES_ERRORS 16.0
+
 /* The screen of graph_node_passes: a polygon's triangles err less than the sag at its
  * centroid (a quad's diagonal midpoint is its centroid; a fan's triangles lie between the
  * centre on f = 0 and the sides), so a node whose roots' centroid lies several bounds off
@@ -440,10 +452,10 @@ static bool edges_rootless(ism_sampler *s, const ism_flatness *fl, const ism_cor
 /* A node whose corner gradients disagree, under an error bound: when crossed (nroots > 0),
  * its secant roots' centroid (their sum / nroots) within CENTROID_SAG_ERRORS (E + shift) of
  * the surface — a cheap screen before the exact roots (most such nodes are far too coarse) —
- * then f proven one graph over the box by its whole enclosure (ism_graph_certified_whole:
- * the halves' proof admits curved nodes many E across whose polygons the tests below do not
- * follow), and no root on a same-sign edge whose gradients disagree (a graph may dip through
- * an edge twice; the polygon would miss it). The measurement decides after. */
+ * then f proven one graph over the box (on its halves up to GRAPH_HALVES_ERRORS, by the
+ * whole box's enclosure past it), and no root on a same-sign edge whose gradients disagree (a
+ * graph may dip through an edge twice; the polygon would miss it). The measurement decides
+ * after. */
 static bool graph_node_passes(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatness *fl,
                               const double lo[3], const double hi[3], const ism_corners *k,
                               const double sum[3], int nroots, const int *disagree,
@@ -455,7 +467,9 @@ static bool graph_node_passes(ism_sampler *s, ism_ivjet_ws *jet, const ism_flatn
         if (!(ism_sample_dist(s, c) <= room))
             return false;
     }
-    if (!ism_graph_certified_whole(s->tape, jet, lo, hi, &s->n_interval))
+    bool halves = min_side(lo, hi) <= GRAPH_HALVES_ERRORS * fl->max_error;
+    if (!(halves ? ism_graph_certified(s->tape, jet, lo, hi, &s->n_interval, NULL)
+                 : ism_graph_certified_whole(s->tape, jet, lo, hi, &s->n_interval)))
         return false;
     return edges_rootless(s, fl, k, disagree, ndisagree);
 }
