@@ -44,6 +44,26 @@ static uint64_t pack(int level, const int64_t c[3])
 
 /* floor((x − lo) / s) clamped to [0, COORD_MAX] (0 for a NaN; three per triangle filed, six
  * per level of every query). */
+/* Bits of the occupied filter per triangle of the mesh at cf_tgrid_init (at least
+ * OCCUPIED_MIN): a grid holds at most a cell per triangle, so at most a quarter of the bits
+ * are set and a query's probe of an empty cell (most of those it reads: the surface is thin
+ * in its box) is skipped three times in four at least. */
+#define OCCUPIED_PER_TRI 4
+#define OCCUPIED_MIN 4096 /* 2^12 */
+
+/* The occupied filter's bit of a cell key (Fibonacci hashing: the top bits of the key times
+ * 2^64 / φ, which spreads neighbouring cells' keys). */
+static inline uint64_t occupied_bit(const cf_tgrid *g, uint64_t key)
+{
+    return (key * 0x9e3779b97f4a7c15ull) >> g->occupied_shift;
+}
+
+static inline bool maybe_occupied(const cf_tgrid *g, uint64_t key)
+{
+    uint64_t b = occupied_bit(g, key);
+    return g->occupied[b >> 6] >> (b & 63) & 1;
+}
+
 static int64_t coord(const cf_tgrid *g, double x, int k, double s)
 {
     return cf_floor_clamped((x - g->lo[k]) / s, (int64_t)COORD_MAX + 1);
@@ -79,6 +99,12 @@ bool cf_tgrid_init(cf_tgrid *g, const double origin[3], double extent, double fi
         !cf_grow((void **)&g->stamp, &g->cap_stamp, ntris + 1, sizeof *g->stamp))
         return false;
     memset(g->cell_of, 0xff, ntris * sizeof *g->cell_of); /* CF_NONE: not filed */
+    size_t bits = OCCUPIED_MIN;
+    g->occupied_shift = 64 - 12; /* log2(OCCUPIED_MIN) */
+    for (; bits < OCCUPIED_PER_TRI * ntris && bits < ((size_t)1 << 40); bits *= 2)
+        g->occupied_shift--;
+    if (!(g->occupied = calloc(bits / 64, sizeof *g->occupied)))
+        return false;
     g->ntris = g->base = ntris;
     return true;
 }
@@ -91,6 +117,7 @@ void cf_tgrid_free(cf_tgrid *g)
     free(g->cell_of);
     free(g->stamp);
     free(g->cell_box);
+    free(g->occupied);
     memset(g, 0, sizeof *g);
 }
 
@@ -137,6 +164,8 @@ static bool file_triangle(cf_tgrid *g, const ism_mesh *m, uint32_t t)
         return false;
     double *cb = g->cell_box + 6 * (size_t)cell;
     if (added) {
+        uint64_t b = occupied_bit(g, key);
+        g->occupied[b >> 6] |= (uint64_t)1 << (b & 63);
         g->head[cell] = CF_NONE;
         for (int k = 0; k < 3; k++) {
             cb[k] = lo[k];
@@ -361,7 +390,10 @@ static bool gather_level(cf_tgrid *g, int level, const query *q, cf_tris *out)
     for (c[0] = a[0]; c[0] <= b[0]; c[0]++)
         for (c[1] = a[1]; c[1] <= b[1]; c[1]++)
             for (c[2] = a[2]; c[2] <= b[2]; c[2]++) {
-                uint32_t cell = ism_key_map_find(&g->cells, pack(level, c));
+                uint64_t key = pack(level, c);
+                if (!maybe_occupied(g, key))
+                    continue; /* never added: the map would answer none */
+                uint32_t cell = ism_key_map_find(&g->cells, key);
                 if (cell != ISM_KEY_NONE && !take_cell(g, cell, q, out))
                     return false;
             }

@@ -44,6 +44,9 @@ typedef struct cf_tgrid {
                                whether or not it files anything) */
     int threads;            /* threads of those passes (1: the calling thread alone) */
     size_t per_level[CF_TGRID_LEVELS];
+    uint64_t *occupied;     /* a bit per hash of a cell key, set as the cell is added: a
+                               query skips the map's probe where its bit is clear */
+    int occupied_shift;     /* 64 less log2 of occupied's bits (a power of two) */
 } cf_tgrid;
 
 /* A growable list of triangle numbers. */
