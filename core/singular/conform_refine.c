@@ -43,7 +43,6 @@
  */
 #include "core/octree/edge_keys.h"
 #include "core/singular/conform_internal.h"
-#include "core/singular/key_map.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 
@@ -498,41 +497,77 @@ static bool split_edge(cf_ctx *c, uint32_t a, uint32_t b, cf_tris *removed, bool
  * measure the same point ((a + b) / 2 is (b + a) / 2 to the bit), and no vertex moves while a
  * round measures, so the second asks the memo (crossing-spheres: 63k gradient evaluations in
  * the refill, most of them midpoints met twice). */
+typedef struct edge_slot {
+    uint64_t key;   /* ism_edge_key of the edge */
+    uint32_t index; /* its midpoint's entries; ISM_KEY_NONE: an empty slot */
+} edge_slot;
+
 typedef struct edge_memo {
-    ism_key_map map;
-    double *d;        /* by the map's index */
-    double (*pre)[4]; /* by the map's index: f and ∇f at the midpoint, taken ahead (prefetch) */
-    uint8_t *state;   /* by the map's index: MID_*, set when the index is added */
-    size_t cap_d, cap_pre, cap_state;
+    edge_slot *slot;  /* open addressing, linear probing, at most half full */
+    int shift;        /* 64 less log2 of the slots */
+    size_t n, max;    /* edges added this round; room for (every edge of the round) */
+    double *d;        /* by index */
+    double (*pre)[4]; /* by index: f and ∇f at the midpoint, taken ahead (prefetch) */
+    uint8_t *state;   /* by index: MID_*, set when the index is added */
+    size_t cap_slot, cap_d, cap_pre, cap_state;
 } edge_memo;
 
 /* An edge's midpoint in a round: its first evaluation taken ahead, or measured (d). An index
- * is read only in the round that added it (the map starts again each round), and its state
+ * is read only in the round that added it (the table starts again each round), and its state
  * is set when it is added. */
 enum { MID_PREFETCHED = 1, MID_MEASURED = 2 };
 
-/* Midpoints the memo first has room for. */
-#define EDGE_MEMO_FIRST 64
+/* Slots of the smallest table (a power of two: 2^6). */
+#define EDGE_SLOTS_MIN 64
 
-/* Room for n midpoints (false when out of memory: nothing lost, what was kept stays). Not
- * zeroed (ism_grow): every entry is written when its index is added, before it is read;
- * cf_grow's zeroing of the new room cost the Klein bottle at E 0.00327 5.4M instructions. */
-static bool edge_memo_room(edge_memo *m, size_t n)
+/* The memo emptied for a round over ntri triangles, with room for their 3 ntri edges: the
+ * entries are sized once per round, the table twice that (a round's edges are known ahead,
+ * so nothing grows or rehashes while it runs; the general hash map, key_map.c, grown from
+ * its first size each round, cost the Klein bottle at E 0.00327 17M instructions). Not
+ * zeroed (ism_grow): every entry is written when its index is added, before it is read.
+ * Out of memory: room for none (every edge measured as it comes, *ok false: edge_measure). */
+static void edge_memo_start(edge_memo *m, size_t ntri)
 {
-    return ism_grow((void **)&m->d, &m->cap_d, n, sizeof *m->d, EDGE_MEMO_FIRST) &&
-           ism_grow((void **)&m->pre, &m->cap_pre, n, sizeof *m->pre, EDGE_MEMO_FIRST) &&
-           ism_grow((void **)&m->state, &m->cap_state, n, sizeof *m->state, EDGE_MEMO_FIRST);
+    size_t max = 3 * ntri, slots = EDGE_SLOTS_MIN;
+    int shift = 64 - 6;
+    for (; slots < 2 * max; slots *= 2)
+        shift--;
+    m->n = m->max = 0;
+    if (!ism_grow((void **)&m->slot, &m->cap_slot, slots, sizeof *m->slot, slots) ||
+        !ism_grow((void **)&m->d, &m->cap_d, max, sizeof *m->d, max) ||
+        !ism_grow((void **)&m->pre, &m->cap_pre, max, sizeof *m->pre, max) ||
+        !ism_grow((void **)&m->state, &m->cap_state, max, sizeof *m->state, max))
+        return;
+    for (size_t i = 0; i < slots; i++)
+        m->slot[i].index = ISM_KEY_NONE;
+    m->shift = shift;
+    m->max = max;
 }
 
-static void edge_memo_reset(edge_memo *m)
+/* The index of edge (a, b) this round, added when new (*added); ISM_KEY_NONE when the memo
+ * has no room (out of memory at edge_memo_start). */
+static inline uint32_t edge_memo_add(edge_memo *m, uint32_t a, uint32_t b, bool *added)
 {
-    ism_key_map_free(&m->map);
-    ism_key_map_init(&m->map);
+    *added = false;
+    if (m->max == 0)
+        return ISM_KEY_NONE;
+    uint64_t key = ism_edge_key(a, b);
+    size_t mask = ((size_t)1 << (64 - m->shift)) - 1;
+    /* Fibonacci hashing: the top bits of the key times 2^64 / φ */
+    size_t j = (size_t)((key * 0x9e3779b97f4a7c15ull) >> m->shift);
+    for (; m->slot[j].index != ISM_KEY_NONE; j = (j + 1) & mask)
+        if (m->slot[j].key == key)
+            return m->slot[j].index;
+    if (m->n == m->max)
+        return ISM_KEY_NONE; /* not reached: a round adds at most max */
+    m->slot[j] = (edge_slot){key, (uint32_t)m->n};
+    *added = true;
+    return (uint32_t)m->n++;
 }
 
 static void edge_memo_free(edge_memo *m)
 {
-    ism_key_map_free(&m->map);
+    free(m->slot);
     free(m->d);
     free(m->pre);
     free(m->state);
@@ -553,12 +588,8 @@ static double known_measure(cf_ctx *c, edge_memo *m, uint32_t i, const double q[
 static double edge_measure(cf_ctx *c, edge_memo *m, uint32_t a, uint32_t b, const double q[3],
                            double E, bool *ok)
 {
-    /* the room before the map add, as prefetch takes it: an index the map holds has its
-     * entries (added first, a later lookup of the edge would read past them) */
     bool added;
-    uint32_t i = edge_memo_room(m, m->map.n + 1)
-                     ? ism_key_map_add(&m->map, ism_edge_key(a, b), &added)
-                     : ISM_KEY_NONE;
+    uint32_t i = edge_memo_add(m, a, b, &added);
     if (i == ISM_KEY_NONE) {
         *ok = false;
         return measure(c, q, E, NULL, 0);
@@ -624,10 +655,7 @@ static void prefetch(cf_ctx *c, edge_memo *m, size_t a, size_t b, tris_pre *cp)
         for (int j = 0; j < 4; j++) {
             if (j) {
                 bool added;
-                cp->edge[t - a][j - 1] = ISM_KEY_NONE;
-                if (!edge_memo_room(m, m->map.n + 1))
-                    continue;
-                uint32_t i = ism_key_map_add(&m->map, ism_edge_key(v[j - 1], v[j % 3]), &added);
+                uint32_t i = edge_memo_add(m, v[j - 1], v[j % 3], &added);
                 cp->edge[t - a][j - 1] = i;
                 if (i == ISM_KEY_NONE || !added)
                     continue;
@@ -667,8 +695,8 @@ static bool split_over(cf_ctx *c, size_t nt0, double E, double min_edge, cf_tris
     size_t lo = nt0, stuck = 0; /* triangles from lo on not measured yet; over E, unsplit */
     for (int round = 0; ok && round < SPLIT_ROUNDS && !c->stopped; round++) {
         edges.n = overs.n = 0;
-        edge_memo_reset(&memo);
         size_t split = 0, hi = c->m->ntris;
+        edge_memo_start(&memo, hi - lo);
         centroids_room(cm, hi);
         /* a triangle measured within E stays so (a split only replaces the two triangles
          * on its edge, by halves appended): each round measures the halves of the last */
