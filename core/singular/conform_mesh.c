@@ -371,18 +371,30 @@ bool cf_compact(cf_ctx *c)
         free(map);
         return false;
     }
-    for (size_t t = 0; t < m->ntris; t++)
-        for (int k = 0; k < 3; k++)
-            use[m->tri[3 * t + k]] |= c->dead[t] ? 1 : 2;
+    /* the corners written out, not looped: the loops' counters cost the Klein bottle at
+     * E 0.00327 as much as their bodies (callgrind) */
+    for (size_t t = 0; t < m->ntris; t++) {
+        const uint32_t *v = m->tri + 3 * t;
+        uint8_t mark = c->dead[t] ? 1 : 2;
+        use[v[0]] |= mark;
+        use[v[1]] |= mark;
+        use[v[2]] |= mark;
+    }
     for (size_t s = 0; s < 2 * m->nsegs; s++)
         use[m->seg[s]] |= 2;
     /* the copies move down by whole elements (nt <= t, nv <= v): a source is read before
-     * any later destination overwrites it, and element by element costs no libc call */
+     * any later destination overwrites it, and element by element costs no libc call; the
+     * elements before the first removed stay where they are */
     size_t nt = 0;
-    for (size_t t = 0; t < m->ntris; t++)
+    while (nt < m->ntris && !c->dead[nt])
+        nt++;
+    for (size_t t = nt; t < m->ntris; t++)
         if (!c->dead[t]) {
-            for (int k = 0; k < 3; k++)
-                m->tri[3 * nt + k] = m->tri[3 * t + k];
+            uint32_t *to = m->tri + 3 * nt;
+            const uint32_t *from = m->tri + 3 * t;
+            to[0] = from[0];
+            to[1] = from[1];
+            to[2] = from[2];
             nt++;
         }
     m->ntris = nt;
@@ -394,11 +406,15 @@ bool cf_compact(cf_ctx *c)
             continue;
         }
         map[v] = (uint32_t)nv;
-        for (int k = 0; k < 3; k++) {
-            m->pos[3 * nv + k] = m->pos[3 * v + k];
-            m->normal[3 * nv + k] = m->normal[3 * v + k];
+        if (nv < v) {
+            double *p = m->pos + 3 * nv;
+            float *n = m->normal + 3 * nv;
+            const double *pf = m->pos + 3 * v;
+            const float *nf = m->normal + 3 * v;
+            p[0] = pf[0], p[1] = pf[1], p[2] = pf[2];
+            n[0] = nf[0], n[1] = nf[1], n[2] = nf[2];
+            c->singular[nv] = c->singular[v];
         }
-        c->singular[nv] = c->singular[v];
         nv++;
     }
     c->st->vertices_removed += m->nverts - nv;
