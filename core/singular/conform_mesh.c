@@ -81,17 +81,24 @@ static bool build_incidence(cf_ctx *c)
     c->inc_tri = malloc((3 * m->ntris + 1) * sizeof *c->inc_tri);
     if (!c->inc_start || !c->inc_tri)
         return false;
+    /* the corners written out, not looped (as cf_compact's: the counters cost as much) */
     uint32_t *st = c->inc_start;
     for (size_t t = 0; t < m->ntris; t++)
-        if (!c->dead[t])
-            for (int k = 0; k < 3; k++)
-                st[m->tri[3 * t + k] + 1]++;
+        if (!c->dead[t]) {
+            const uint32_t *v = m->tri + 3 * t;
+            st[v[0] + 1]++;
+            st[v[1] + 1]++;
+            st[v[2] + 1]++;
+        }
     for (size_t v = 0; v < m->nverts; v++)
         st[v + 1] += st[v];
     for (size_t t = 0; t < m->ntris; t++)
-        if (!c->dead[t])
-            for (int k = 0; k < 3; k++)
-                c->inc_tri[st[m->tri[3 * t + k]]++] = (uint32_t)t;
+        if (!c->dead[t]) {
+            const uint32_t *v = m->tri + 3 * t;
+            c->inc_tri[st[v[0]]++] = (uint32_t)t;
+            c->inc_tri[st[v[1]]++] = (uint32_t)t;
+            c->inc_tri[st[v[2]]++] = (uint32_t)t;
+        }
     for (size_t v = m->nverts; v > 0; v--)
         st[v] = st[v - 1];
     st[0] = 0;
