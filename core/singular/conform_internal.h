@@ -10,6 +10,7 @@
 #include <stdbool.h>
 #include "core/eval/eval.h"
 #include "core/mesh/mesh.h"
+#include "core/octree/edge_keys.h"
 #include "core/singular/conform_stats.h"
 #include "core/singular/key_map.h"
 #include "core/singular/locus.h"
@@ -504,6 +505,46 @@ int cf_clip_ears(cf_ctx *c, const cf_polyline *pl, cf_loop *l, double *u, double
  * vertex leaves its loop. False when out of memory (nothing more marked dead; the caller
  * undoes the cut). */
 bool cf_drop_spikes(cf_ctx *c, cf_loops *ls, uint32_t **rm, size_t *nrm);
+
+/* ---- conform_refine.c: a round's edges, numbered ---- */
+/* The edges (a, b) of a refinement round, numbered 0, 1, ... as first added (either way
+ * round): open addressing with linear probing in a power-of-two table sized at the round's
+ * start for max edges, at most half full (nothing grows or rehashes while a round runs). */
+typedef struct cf_edge_slot {
+    uint64_t key;   /* ism_edge_key of the edge */
+    uint32_t index; /* its number; ISM_KEY_NONE: an empty slot */
+} cf_edge_slot;
+
+typedef struct cf_edge_table {
+    cf_edge_slot *slot;
+    int shift;         /* 64 less log2 of the slots */
+    size_t n, max;     /* edges added; room for */
+    size_t cap_slot;
+} cf_edge_table;
+
+/* Empties t with room for max edges; false when out of memory (room for none then). */
+bool cf_edge_table_start(cf_edge_table *t, size_t max);
+void cf_edge_table_free(cf_edge_table *t);
+
+/* The number of edge (a, b), added when new (*added); ISM_KEY_NONE when max are held. */
+static inline uint32_t cf_edge_table_add(cf_edge_table *t, uint32_t a, uint32_t b, bool *added)
+{
+    *added = false;
+    if (t->max == 0)
+        return ISM_KEY_NONE;
+    uint64_t key = ism_edge_key(a, b);
+    size_t mask = ((size_t)1 << (64 - t->shift)) - 1;
+    /* Fibonacci hashing: the top bits of the key times 2^64 / φ */
+    size_t j = (size_t)((key * 0x9e3779b97f4a7c15ull) >> t->shift);
+    for (; t->slot[j].index != ISM_KEY_NONE; j = (j + 1) & mask)
+        if (t->slot[j].key == key)
+            return t->slot[j].index;
+    if (t->n == t->max)
+        return ISM_KEY_NONE;
+    t->slot[j] = (cf_edge_slot){key, (uint32_t)t->n};
+    *added = true;
+    return (uint32_t)t->n++;
+}
 
 /* ---- conform_refine.c: the refill's triangles checked ---- */
 /* The live triangles from nt0 on (made by the pass): those with a centroid or edge midpoint

@@ -497,19 +497,12 @@ static bool split_edge(cf_ctx *c, uint32_t a, uint32_t b, cf_tris *removed, bool
  * measure the same point ((a + b) / 2 is (b + a) / 2 to the bit), and no vertex moves while a
  * round measures, so the second asks the memo (crossing-spheres: 63k gradient evaluations in
  * the refill, most of them midpoints met twice). */
-typedef struct edge_slot {
-    uint64_t key;   /* ism_edge_key of the edge */
-    uint32_t index; /* its midpoint's entries; ISM_KEY_NONE: an empty slot */
-} edge_slot;
-
 typedef struct edge_memo {
-    edge_slot *slot;  /* open addressing, linear probing, at most half full */
-    int shift;        /* 64 less log2 of the slots */
-    size_t n, max;    /* edges added this round; room for (every edge of the round) */
-    double *d;        /* by index */
-    double (*pre)[4]; /* by index: f and ∇f at the midpoint, taken ahead (prefetch) */
-    uint8_t *state;   /* by index: MID_*, set when the index is added */
-    size_t cap_slot, cap_d, cap_pre, cap_state;
+    cf_edge_table tab; /* the round's edges → their entries' index */
+    double *d;         /* by index */
+    double (*pre)[4];  /* by index: f and ∇f at the midpoint, taken ahead (prefetch) */
+    uint8_t *state;    /* by index: MID_*, set when the index is added */
+    size_t cap_d, cap_pre, cap_state;
 } edge_memo;
 
 /* An edge's midpoint in a round: its first evaluation taken ahead, or measured (d). An index
@@ -520,6 +513,29 @@ enum { MID_PREFETCHED = 1, MID_MEASURED = 2 };
 /* Slots of the smallest table (a power of two: 2^6). */
 #define EDGE_SLOTS_MIN 64
 
+bool cf_edge_table_start(cf_edge_table *t, size_t max)
+{
+    size_t slots = EDGE_SLOTS_MIN;
+    int shift = 64 - 6;
+    for (; slots < 2 * max; slots *= 2)
+        shift--;
+    t->n = t->max = 0;
+    if (!ism_grow((void **)&t->slot, &t->cap_slot, slots, sizeof *t->slot, slots))
+        return false;
+    for (size_t i = 0; i < slots; i++)
+        t->slot[i].index = ISM_KEY_NONE;
+    t->shift = shift;
+    t->max = max;
+    return true;
+}
+
+void cf_edge_table_free(cf_edge_table *t)
+{
+    free(t->slot);
+    t->slot = NULL;
+    t->n = t->max = t->cap_slot = 0;
+}
+
 /* The memo emptied for a round over ntri triangles, with room for their 3 ntri edges: the
  * entries are sized once per round, the table twice that (a round's edges are known ahead,
  * so nothing grows or rehashes while it runs; the general hash map, key_map.c, grown from
@@ -528,46 +544,17 @@ enum { MID_PREFETCHED = 1, MID_MEASURED = 2 };
  * Out of memory: room for none (every edge measured as it comes, *ok false: edge_measure). */
 static void edge_memo_start(edge_memo *m, size_t ntri)
 {
-    size_t max = 3 * ntri, slots = EDGE_SLOTS_MIN;
-    int shift = 64 - 6;
-    for (; slots < 2 * max; slots *= 2)
-        shift--;
-    m->n = m->max = 0;
-    if (!ism_grow((void **)&m->slot, &m->cap_slot, slots, sizeof *m->slot, slots) ||
+    size_t max = 3 * ntri;
+    if (!cf_edge_table_start(&m->tab, max) ||
         !ism_grow((void **)&m->d, &m->cap_d, max, sizeof *m->d, max) ||
         !ism_grow((void **)&m->pre, &m->cap_pre, max, sizeof *m->pre, max) ||
         !ism_grow((void **)&m->state, &m->cap_state, max, sizeof *m->state, max))
-        return;
-    for (size_t i = 0; i < slots; i++)
-        m->slot[i].index = ISM_KEY_NONE;
-    m->shift = shift;
-    m->max = max;
-}
-
-/* The index of edge (a, b) this round, added when new (*added); ISM_KEY_NONE when the memo
- * has no room (out of memory at edge_memo_start). */
-static inline uint32_t edge_memo_add(edge_memo *m, uint32_t a, uint32_t b, bool *added)
-{
-    *added = false;
-    if (m->max == 0)
-        return ISM_KEY_NONE;
-    uint64_t key = ism_edge_key(a, b);
-    size_t mask = ((size_t)1 << (64 - m->shift)) - 1;
-    /* Fibonacci hashing: the top bits of the key times 2^64 / φ */
-    size_t j = (size_t)((key * 0x9e3779b97f4a7c15ull) >> m->shift);
-    for (; m->slot[j].index != ISM_KEY_NONE; j = (j + 1) & mask)
-        if (m->slot[j].key == key)
-            return m->slot[j].index;
-    if (m->n == m->max)
-        return ISM_KEY_NONE; /* not reached: a round adds at most max */
-    m->slot[j] = (edge_slot){key, (uint32_t)m->n};
-    *added = true;
-    return (uint32_t)m->n++;
+        m->tab.max = 0;
 }
 
 static void edge_memo_free(edge_memo *m)
 {
-    free(m->slot);
+    cf_edge_table_free(&m->tab);
     free(m->d);
     free(m->pre);
     free(m->state);
@@ -589,7 +576,7 @@ static double edge_measure(cf_ctx *c, edge_memo *m, uint32_t a, uint32_t b, cons
                            double E, bool *ok)
 {
     bool added;
-    uint32_t i = edge_memo_add(m, a, b, &added);
+    uint32_t i = cf_edge_table_add(&m->tab, a, b, &added);
     if (i == ISM_KEY_NONE) {
         *ok = false;
         return measure(c, q, E, NULL, 0);
@@ -655,7 +642,7 @@ static void prefetch(cf_ctx *c, edge_memo *m, size_t a, size_t b, tris_pre *cp)
         for (int j = 0; j < 4; j++) {
             if (j) {
                 bool added;
-                uint32_t i = edge_memo_add(m, v[j - 1], v[j % 3], &added);
+                uint32_t i = cf_edge_table_add(&m->tab, v[j - 1], v[j % 3], &added);
                 cp->edge[t - a][j - 1] = i;
                 if (i == ISM_KEY_NONE || !added)
                     continue;
