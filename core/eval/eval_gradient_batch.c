@@ -14,6 +14,7 @@
 #include "core/eval/avx2_clone.h"
 #include "core/eval/deriv_rules.h"
 #include "core/eval/lanes4.h"
+#include "core/eval/threaded.h"
 #include "core/eval/trig_pair.h"
 #include "core/eval/workspace.h"
 #include <stdint.h>
@@ -112,7 +113,10 @@ INLINE void chain_partials(double *regs, const ism_instr *in, const double *g1v,
 _Static_assert(ISM_TRIG_GROUP_LANES == GL, "a group pair holds a whole register");
 _Static_assert(VL == 4, "ism_trig_groups' groups are of four lanes");
 
-INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig, size_t ng)
+/* One instruction over ng groups, its operation op (code->op: a constant where the threaded
+ * loops below inline it, so that only op's own arm and addresses are compiled there). */
+INLINE void grad_step_op(int op, const ism_instr *code, double *regs, ism_trig_cache *trig,
+                         size_t ng)
 {
     /* the instruction in a local: the lanes' stores go through memcpy, which may alias the
      * tape, so fields read through `code` were loaded again after every store (callgrind:
@@ -121,9 +125,9 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
     const size_t n = ng * VL;
     double *ov = comp(regs, in->out, 0);
     const double *av = comp(regs, in->a, 0);
-    const double *bv = comp(regs, ism_op_has_reg_b(in->op) ? in->b : in->a, 0);
+    const double *bv = comp(regs, ism_op_has_reg_b(op) ? in->b : in->a, 0);
     double g1[GL];
-    switch (in->op) {
+    switch (op) {
     case ISM_OP_ADD_RR:
     case ISM_OP_SUB_RR:
         #pragma GCC unroll 4
@@ -132,7 +136,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
             const double *a = comp(regs, in->a, k), *b = comp(regs, in->b, k);
             #pragma GCC unroll 4
             for (size_t g = 0; g < ng; g++) {
-                if (in->op == ISM_OP_ADD_RR)
+                if (op == ISM_OP_ADD_RR)
                     k_add(o + g * VL, a + g * VL, b + g * VL);
                 else
                     k_sub(o + g * VL, a + g * VL, b + g * VL);
@@ -174,7 +178,7 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
             #pragma GCC unroll 4
             for (size_t g = 0; g < ng; g++)
                 k_pick(o + g * VL, av + g * VL, bv + g * VL, a + g * VL, b + g * VL,
-                       in->op == ISM_OP_MIN_RR);
+                       op == ISM_OP_MIN_RR);
         }
         return;
     case ISM_OP_CONST:
@@ -189,8 +193,8 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         v4d c = {in->imm, in->imm, in->imm, in->imm};
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++)
-            v4_st(ov + g * VL, in->op == ISM_OP_ADD_RC ? v4_ld(av + g * VL) + c : v4_ld(av + g * VL) * c);
-        chain_partials(regs, in, NULL, in->op == ISM_OP_ADD_RC ? 1.0 : in->imm, ng);
+            v4_st(ov + g * VL, op == ISM_OP_ADD_RC ? v4_ld(av + g * VL) + c : v4_ld(av + g * VL) * c);
+        chain_partials(regs, in, NULL, op == ISM_OP_ADD_RC ? 1.0 : in->imm, ng);
         return;
     }
     case ISM_OP_COPY:
@@ -201,14 +205,14 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
             v4d a = v4_ld(av + g * VL);
-            v4_st(ov + g * VL, in->op == ISM_OP_COPY  ? a
-                            : in->op == ISM_OP_NEG ? -a
-                            : in->op == ISM_OP_SUB_CR ? c - a
+            v4_st(ov + g * VL, op == ISM_OP_COPY  ? a
+                            : op == ISM_OP_NEG ? -a
+                            : op == ISM_OP_SUB_CR ? c - a
                                                       : a / c);
         }
         chain_partials(regs, in, NULL,
-                       in->op == ISM_OP_COPY     ? 1.0
-                       : in->op == ISM_OP_DIV_RC ? 1.0 / in->imm
+                       op == ISM_OP_COPY     ? 1.0
+                       : op == ISM_OP_DIV_RC ? 1.0 / in->imm
                                                  : -1.0,
                        ng);
         return;
@@ -241,8 +245,8 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
             v4d s = v4_ld(p->s + g * VL), c = v4_ld(p->c + g * VL);
-            v4_st(ov + g * VL, in->op == ISM_OP_SIN ? s : c);
-            v4_st(g1 + g * VL, in->op == ISM_OP_SIN ? c : -s);
+            v4_st(ov + g * VL, op == ISM_OP_SIN ? s : c);
+            v4_st(g1 + g * VL, op == ISM_OP_SIN ? c : -s);
         }
         break;
     }
@@ -272,6 +276,11 @@ INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig,
         break;
     }
     chain_partials(regs, in, g1, 0.0, ng);
+}
+
+INLINE void grad_step(const ism_instr *code, double *regs, ism_trig_cache *trig, size_t ng)
+{
+    grad_step_op(code->op, code, regs, trig, ng);
 }
 
 /* The input registers for n points, ng groups (VL (ng - 1) < n <= VL ng): x, y, z in their
@@ -340,13 +349,90 @@ INLINE void chunk_n(const ism_tape *t, double *regs, ism_trig_cache *trig,
 }
 
 #if ISM_HAVE_AVX2_CLONE
-/* More than 4 groups: the steps in a function of their own (inlined beside the copies, the
- * generic loop cost Klein's tape 13% more at 32 points). */
+/* The rare steps (exp and the default arm's one-operand rules) out of line: grad_step's
+ * switch, as the baseline runs every step. */
 ISM_AVX2_CLONE __attribute__((noinline))
-static void run_tape_wide_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
+static void rare_step_avx2(const ism_instr *code, double *regs, ism_trig_cache *trig, size_t ng)
 {
-    run_tape_n(t, regs, trig, ng);
+    grad_step(code, regs, trig, ng);
 }
+
+/* Every operation and how the threaded loops step it: OWN inlines grad_step_op with the
+ * operation a constant (its arm alone, its own operands' addresses), RARE calls
+ * rare_step_avx2. */
+#define GRAD_STEPS(X)                                                                       \
+    X(ISM_OP_CONST, OWN)                                                                    \
+    X(ISM_OP_COPY, OWN)                                                                     \
+    X(ISM_OP_ADD_RR, OWN)                                                                   \
+    X(ISM_OP_ADD_RC, OWN)                                                                   \
+    X(ISM_OP_SUB_RR, OWN)                                                                   \
+    X(ISM_OP_SUB_CR, OWN)                                                                   \
+    X(ISM_OP_MUL_RR, OWN)                                                                   \
+    X(ISM_OP_MUL_RC, OWN)                                                                   \
+    X(ISM_OP_DIV_RR, OWN)                                                                   \
+    X(ISM_OP_DIV_RC, OWN)                                                                   \
+    X(ISM_OP_DIV_CR, RARE)                                                                  \
+    X(ISM_OP_MIN_RR, OWN)                                                                   \
+    X(ISM_OP_MIN_RC, RARE)                                                                  \
+    X(ISM_OP_MAX_RR, OWN)                                                                   \
+    X(ISM_OP_MAX_RC, RARE)                                                                  \
+    X(ISM_OP_NEG, OWN)                                                                      \
+    X(ISM_OP_SQUARE, OWN)                                                                   \
+    X(ISM_OP_POWI, OWN)                                                                     \
+    X(ISM_OP_POWC, RARE)                                                                    \
+    X(ISM_OP_SQRT, RARE)                                                                    \
+    X(ISM_OP_SIN, OWN)                                                                      \
+    X(ISM_OP_COS, OWN)                                                                      \
+    X(ISM_OP_TAN, RARE)                                                                     \
+    X(ISM_OP_EXP, RARE)                                                                     \
+    X(ISM_OP_LOG, RARE)                                                                     \
+    X(ISM_OP_ABS, OWN)
+ISM_THREADED_COMPLETE(GRAD_STEPS, "GRAD_STEPS names every operation (THREADED_STEPS' table)");
+
+#define GRAD_LABEL(OP, HOW) __label__ L_##OP;
+#define GRAD_OWN(OP) grad_step_op(OP, in, regs, trig, ng)
+#define GRAD_RARE(OP) rare_step_avx2(in, regs, trig, ng)
+#define GRAD_BODY(OP, HOW)                                                                  \
+    L_##OP:                                                                                 \
+    GRAD_##HOW(OP);                                                                         \
+    ISM_THREADED_NEXT(next_step, in, end, return)
+
+/* A function NAME stepping t's tape over NG groups by direct threading (threaded.h): each
+ * step's code computes only its operation's addresses and jumps to the next step's. The
+ * switch in a loop (run_tape_n) paid, every step, the addresses of every arm's operands (some
+ * spilled), a bound test, a table offset and the loop's test: about 43 instructions a step
+ * before its arithmetic (callgrind --dump-instr, Barth's sextic at E 0.0259: 994K batched
+ * steps of 1 to 4 groups). */
+#define THREADED_RUN(NAME, NG)                                                              \
+    ISM_AVX2_CLONE __attribute__((noinline)) static void NAME(                              \
+        const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng_in)                \
+    {                                                                                       \
+        GRAD_STEPS(GRAD_LABEL)                                                              \
+        __label__ L_BAD;                                                                    \
+        ISM_THREADED_TABLE(next_step, GRAD_STEPS);                                          \
+        const size_t ng = (NG);                                                             \
+        (void)ng_in;                                                                        \
+        if (!t->len)                                                                        \
+            return;                                                                         \
+        const ism_instr *in = t->code, *const end = t->code + t->len;                       \
+        goto *next_step[in->op];                                                            \
+        GRAD_STEPS(GRAD_BODY)                                                               \
+        GRAD_BODY(BAD, RARE)                                                                \
+    }
+THREADED_RUN(run_tape_1_avx2, 1)
+THREADED_RUN(run_tape_2_avx2, 2)
+THREADED_RUN(run_tape_3_avx2, 3)
+THREADED_RUN(run_tape_4_avx2, 4)
+/* More than 4 groups: ng as it comes */
+THREADED_RUN(run_tape_wide_avx2, ng_in)
+
+/* One chunk of n points in NG groups through RUN: inputs, steps, results. */
+#define CHUNK_THREADED(NG, RUN)                                                             \
+    do {                                                                                    \
+        load_inputs(regs, src, n, NG);                                                      \
+        RUN(t, regs, trig, NG);                                                             \
+        store_results(regs, t->result, f, g, n, NG);                                        \
+    } while (0)
 
 /* ng a constant in each case (the polygoniser's batches: a node's or a leaf's few points),
  * so that grad_step's loops over the groups and the inputs' and results' copies unroll: the
@@ -354,24 +440,18 @@ static void run_tape_wide_avx2(const ism_tape *t, double *regs, ism_trig_cache *
  * caller, were most of a short batch's cost. Klein bottle's tape, callgrind (notes/
  * klein25_mb.c mode 1), instructions a point at 1 / 4 / 6 / 8 / 10 / 16 / 32 points, as of
  * 29c1011: 1,316 / 348 / 304 / 235 / 216 / 160 / 206 (the earlier steps in that commit's and
- * its predecessors' messages). The default arm repeats chunk_n's three steps on purpose:
- * only its run differs (run_tape_wide_avx2, kept out of line). */
+ * its predecessors' messages). */
 ISM_AVX2_CLONE
 static void chunk_avx2(const ism_tape *t, double *regs, ism_trig_cache *trig,
                        const double *const src[3], double *f, double (*g)[3], size_t n)
 {
     size_t ng = groups(n);
     switch (ng) {
-    case 1: chunk_n(t, regs, trig, src, f, g, n, 1); break;
-    case 2: chunk_n(t, regs, trig, src, f, g, n, 2); break;
-    case 3: chunk_n(t, regs, trig, src, f, g, n, 3); break;
-    case 4: chunk_n(t, regs, trig, src, f, g, n, 4); break;
-    default: {
-        load_inputs(regs, src, n, ng);
-        run_tape_wide_avx2(t, regs, trig, ng);
-        store_results(regs, t->result, f, g, n, ng);
-        break;
-    }
+    case 1: CHUNK_THREADED(1, run_tape_1_avx2); break;
+    case 2: CHUNK_THREADED(2, run_tape_2_avx2); break;
+    case 3: CHUNK_THREADED(3, run_tape_3_avx2); break;
+    case 4: CHUNK_THREADED(4, run_tape_4_avx2); break;
+    default: CHUNK_THREADED(ng, run_tape_wide_avx2); break;
     }
 }
 #endif
