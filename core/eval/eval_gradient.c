@@ -404,9 +404,12 @@ static bool branches_at(const ism_tape *t, size_t top, ism_eval_ws *ws, double x
     ism_dual *r = dual_inputs(ws, x, y, z);
     run_steps(t->code, top, r, ws->trig);
     const ism_dual br[2] = {r[mm->a], r[mm->b]}; /* the steps after may reuse a's, b's */
+    const size_t after = t->len - top - 1;
     for (int s = 0; s < 2; s++) {
         r[mm->out] = br[s];
-        run_steps(t->code + top + 1, t->len - top - 1, r, ws->trig);
+        if (after) /* none where the min/max is f (ism_eval_top_branches): no call, no
+                      prologue (Barth's sextic at E 0.00389: 89K empty runs, ~30 each) */
+            run_steps(t->code + top + 1, after, r, ws->trig);
         val[s] = r[t->result].v;
         memcpy(grad[s], r[t->result].d, sizeof grad[s]);
     }
