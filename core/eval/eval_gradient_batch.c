@@ -312,6 +312,19 @@ INLINE void load_inputs(double *regs, const double *const src[3], size_t n, size
     }
 }
 
+/* Four lanes' partials (x, y, z: d/dx, d/dy, d/dz of lanes 0-3) into g[0..4), which are
+ * 12 doubles in a row: x0 y0 z0 x1 | y1 z1 x2 y2 | z2 x3 y3 z3, three vectors by shuffles
+ * (copies: the bits as they are) where twelve scalar loads and stores were. */
+INLINE void store_group_grads(double (*g)[3], v4d x, v4d y, v4d z)
+{
+    v4d xy01 = __builtin_shuffle(x, y, (v4i){0, 4, 1, 5}); /* x0 y0 x1 y1 */
+    v4d xy23 = __builtin_shuffle(x, y, (v4i){2, 6, 3, 7}); /* x2 y2 x3 y3 */
+    v4d mid = __builtin_shuffle(xy01, xy23, (v4i){3, 3, 4, 5}); /* y1 y1 x2 y2 */
+    v4_st(&g[0][0], __builtin_shuffle(xy01, z, (v4i){0, 1, 4, 2}));
+    v4_st(&g[1][1], __builtin_shuffle(mid, z, (v4i){0, 5, 2, 3}));
+    v4_st(&g[2][2], __builtin_shuffle(xy23, z, (v4i){6, 2, 3, 7}));
+}
+
 /* f and the gradient of the first n lanes of register res. */
 INLINE void store_results(const double *regs, uint32_t res, double *f, double (*g)[3],
                           size_t n, size_t ng)
@@ -323,7 +336,12 @@ INLINE void store_results(const double *regs, uint32_t res, double *f, double (*
         v4_st(f + k * VL, v4_ld(rv + k * VL));
     for (size_t j = (ng - 1) * VL; j < n; j++)
         f[j] = rv[j];
-    for (size_t j = 0; j < n; j++) {
+    size_t whole = n / VL; /* groups all of whose lanes are asked */
+    #pragma GCC unroll 4
+    for (size_t k = 0; k < whole && k < ng; k++)
+        store_group_grads(g + k * VL, v4_ld(rx + k * VL), v4_ld(ry + k * VL),
+                          v4_ld(rz + k * VL));
+    for (size_t j = whole * VL; j < n; j++) {
         g[j][0] = rx[j];
         g[j][1] = ry[j];
         g[j][2] = rz[j];
