@@ -34,8 +34,17 @@ static double finest_cell(const double box[6], int depth)
  * distances <= E, the singular/conform/tube_folds/curve_cert suites, and sweep_singular's
  * bounded rows (E = 1e-3 diagonal, depth.max 10) on the singular presets in the own, +1e-3
  * and irrational boxes: counts as at depth 10, 0 artefacts, every centroid/midpoint within E.
- * Klein at E 1e-2 and at E 1e-3 (box 8) keep depths 8 and 11. */
-#define SINGULAR_CELLS_PER_E 4.6
+ * Klein at E 1e-2 and at E 1e-3 (box 8) keep depths 8 and 11. 5 (R >= 0.625 c): the depth
+ * steps by 2, so the cell lands anywhere in (k/2, k] E, and Klein at E 3.27e-3 (box 8) took
+ * depth 10 at 4.6 (cell 2.39 E; depth 9 is 4.78 E): a tube half the width the bound allows,
+ * 33,356 of its 86,632 triangles the refill's and 64,476 more cut out of the polygoniser's
+ * (callgrind, ism_mesh_surface, one thread: 2,611.0M); at 5 it takes depth 9: 61,172
+ * triangles (refill 15,040), 1,882.2M, max centroid / midpoint distance the same 0.00275 /
+ * 0.00327 (the worst lie off the tube). Measured: Klein within E with the topology of depth
+ * 10 in the three placements at 4.78 E (test_singular_depth.c) and still at 9.6 E (k 10:
+ * depth 8), and at E 1e-2 at 6.25 E (k 6.3: depth 7, midpoint 0.998 E); sweep_singular's
+ * bounded rows at R = 8.14e-4 (cell 4.8 E: depth 8 instead of 9) on the singular presets. */
+#define SINGULAR_CELLS_PER_E 5.0
 /* ... and never shallower than the locus search's own default depth, at which every
  * preset's points and curves are found: a coarse E must not make the search miss one. */
 #define SINGULAR_MIN_DEPTH ISM_LOCUS_DEFAULT_DEPTH

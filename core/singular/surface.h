@@ -21,7 +21,7 @@ typedef struct ism_surface_times {
 } ism_surface_times;
 
 /* The depth that sizes the singular stage: depth.max, or under max_error the first depth (not
- * below 7) whose cell is at most 4.6 E (surface.c). */
+ * below 7) whose cell is at most 5 E (surface.c). */
 int ism_singular_depth(const ism_poly_options *po);
 
 /* The locus options that go with polygoniser options: the same box, depth

@@ -18,9 +18,9 @@
               "16*x*z*(x^2 + y^2 + z^2 - 2*y - 1)"
 #define E 1e-2
 
-/* The rule itself: no bound -> depth.max; box 8 at E 1e-2 -> 8 (cell 1/32 <= 4.6 E; 1/16 is
+/* The rule itself: no bound -> depth.max; box 8 at E 1e-2 -> 8 (cell 1/32 <= 5 E; 1/16 is
  * 6.25 E), never below 7 (a coarse E), never above depth.max; a cube box at the default
- * bound E = 1e-3 x diagonal -> 7 (cell 1/128 of the side = 4.51 E <= 4.6 E). */
+ * bound E = 1e-3 x diagonal -> 7 (cell 1/128 of the side = 4.51 E <= 5 E). */
 Test(singular_depth, from_the_bound)
 {
     ism_poly_options po;
@@ -33,14 +33,19 @@ Test(singular_depth, from_the_bound)
     cr_expect_eq(ism_singular_depth(&po), 8);
     po.max_depth = 16;
     cr_expect_eq(ism_singular_depth(&po), 8);
-    po.max_error = 1e-3; /* cell <= 4.6e-3: 8 / 2^11 (8 / 2^10 is 7.8e-3) */
+    po.max_error = 1e-3; /* cell <= 5e-3: 8 / 2^11 (8 / 2^10 is 7.8e-3) */
     cr_expect_eq(ism_singular_depth(&po), 11);
     po.max_error = 1e-3 * 8 * sqrt(3.0); /* the default bound: 1/16 = 4.51 E, 1/8 = 9.0 E */
     cr_expect_eq(ism_singular_depth(&po), 7, "default bound on a cube box");
-    po.max_error = 1e-3 * 8 * sqrt(3.0) * 0.9; /* 1/16 = 5.01 E > 4.6 E: one deeper */
+    po.max_error = 1e-3 * 8 * sqrt(3.0) * 0.9; /* 1/16 = 5.01 E > 5 E: one deeper */
     cr_expect_eq(ism_singular_depth(&po), 8);
     po.max_error = 1;
     cr_expect_eq(ism_singular_depth(&po), 7);
+    po.max_depth = 10;
+    po.max_error = 3.27e-3; /* 8 / 2^9 = 4.78 E <= 5 E: 9 (at 4.6 E it was 10) */
+    cr_expect_eq(ism_singular_depth(&po), 9, "klein box at E 3.27e-3");
+    po.max_error = 3.1e-3; /* 8 / 2^9 = 5.04 E > 5 E: one deeper */
+    cr_expect_eq(ism_singular_depth(&po), 10, "klein box at E 3.1e-3");
     po.max_depth = 6;
     cr_expect_eq(ism_singular_depth(&po), 6);
 }
@@ -61,6 +66,20 @@ static void expect_within_and_free(const ism_tape *t, double e, int which, ism_m
     ism_mesh_free(m10);
 }
 
+/* The Klein bottle's topology in box `which`: one double curve found, χ 0, one component, the
+ * curve meshed as one closed non-manifold line. */
+static void expect_klein_topology(const ism_tape *t, const ism_mesh *m, const ism_locus *l,
+                                  int which)
+{
+    cr_expect_eq(l->ncurves, 1, "box %d: %zu curves", which, l->ncurves);
+    pf_props p;
+    pf_measure(m, t, &p);
+    cr_expect_eq(p.euler, 0, "box %d: χ %ld", which, p.euler);
+    cr_expect_eq(p.components, 1, "box %d: %zu components", which, p.components);
+    size_t nm = 0;
+    cr_expect(pf_nm_edges_one_closed_curve(m, &nm), "box %d: the double curve", which);
+}
+
 Test(singular_depth, klein_depth_max_is_only_a_limit)
 {
     const pf_surface s = {KLEIN, NULL, 0, NULL, 0};
@@ -74,14 +93,41 @@ Test(singular_depth, klein_depth_max_is_only_a_limit)
         pf_run_surface_bounded(t, box, 3, 8, E, &m8, &l8);
         pf_run_surface_bounded(t, box, 3, 10, E, &m10, &l10);
         pf_same_mesh(&m8, &m10, "depth.max 8 and 10 under E 1e-2");
-        cr_expect_eq(l10.ncurves, 1, "box %d: %zu curves", which, l10.ncurves);
-        pf_props p;
-        pf_measure(&m10, t, &p);
-        cr_expect_eq(p.euler, 0, "box %d: χ %ld", which, p.euler);
-        cr_expect_eq(p.components, 1, "box %d: %zu components", which, p.components);
-        size_t nm = 0;
-        cr_expect(pf_nm_edges_one_closed_curve(&m10, &nm), "box %d: the double curve", which);
+        expect_klein_topology(t, &m10, &l10, which);
         expect_within_and_free(t, E, which, &m8, &m10, &l8, &l10);
+    }
+    ism_tape_free(t);
+}
+
+/* The coarser tube the rule allows keeps its guarantees: the Klein bottle at E = 3.27e-3 (box 8,
+ * depth.max 10) gets the singular stage's depth 9 (cell 4.78 E; the rule at 4.6 E made it 10,
+ * 2.39 E: 86,632 triangles, now 61,172), and its mesh is still within E at centroids and edge
+ * midpoints (|f| / |∇f| refined by Newton, pf_analyse_plain), with the topology of depth 10 in
+ * each placement: χ 0, one component, one double curve found and meshed as one closed
+ * non-manifold line. */
+Test(singular_depth, klein_coarser_tube_within_the_bound)
+{
+    const pf_surface s = {KLEIN, NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&s);
+    const double base[6] = {-4, -4, -4, 4, 4, 4}, e = 3.27e-3;
+    for (int which = pf_first_box() - 1; which < 2; which++) {
+        ism_poly_options o;
+        ism_poly_options_default(&o);
+        pf_sweep_box(base, 10, which, o.box);
+        o.min_depth = 3, o.max_depth = 10, o.threads = 1, o.max_error = e;
+        cr_expect_eq(ism_singular_depth(&o), 9, "box %d", which);
+        ism_mesh m;
+        ism_locus l;
+        ism_poly_stats st;
+        pf_mesh_surface_with(t, &o, &m, &l, &st);
+        expect_klein_topology(t, &m, &l, which);
+        ism_analysis a;
+        pf_analyse_plain(&m, t, &a);
+        cr_expect_leq(a.max_dist_centroid, e, "box %d: centroid %g", which, a.max_dist_centroid);
+        cr_expect_leq(a.max_dist_midpoint, e, "box %d: midpoint %g", which, a.max_dist_midpoint);
+        ism_analysis_free(&a);
+        ism_locus_free(&l);
+        ism_mesh_free(&m);
     }
     ism_tape_free(t);
 }
