@@ -117,7 +117,13 @@
  * thread, callgrind ism_mesh_surface, whole enclosures only -> halves up to 16 E: Klein 0.0141
  * 541.8M -> 492.9M instructions, 17,546 -> 16,704 triangles, max_c 0.0100, max_m 0.0140778
  * both; Barth 0.00389 1,721.1M -> 1,716.8M, 72,696 -> 70,632, max_c 0.00317, max_m 0.00388
- * both; Barth 0.0259 24,344 both (its nodes pass elsewhere). */
+ * both; Barth 0.0259 24,344 both (its nodes pass elsewhere). Guarded by
+ * thin::horn_cyclide_under_a_bound (own box, E 0.064: 32 leaves 4 + 4 artefacts there, quick
+ * runs included). The crease sites (one_branch_graph, crossing_graphs) take the halves at every
+ * size: Barth E 0.1 / 0.05 / 0.0259 / 0.01 / 0.00389 and the gyroid ball 0.05 to 0.00109, depth
+ * 10, three placements, have the fine reference's topology (χ −28 / −18, one piece, no boundary
+ * or non-manifold edge, no artefact) with them, without them, or with either site's proof
+ * replaced by true (mendA32's notes). */
 #define GRAPH_HALVES_ERRORS 16.0
 
 /* The screen of graph_node_passes: a polygon's triangles err less than the sag at its

@@ -338,14 +338,20 @@ Test(thin, horn_cyclide_depth_8, .timeout = 120)
  * depth 8, in the box moved by irrational fractions of a cell the horns ended ~1 from the
  * point in open loops, the point not joined (χ 2 with no non-manifold point; χ 3 in 3
  * pieces, 2 loops); the own and 1e-3 placements were right. Each must give what the closed
- * form does, as without a bound. */
+ * form does, as without a bound. The own box at E 0.064 also guards plot_test.c's
+ * GRAPH_HALVES_ERRORS (16): with the graph proof on halves up to 32 E (or at every size)
+ * graph_node_passes passed curved nodes 2 across whose polygons left 4 non-manifold edges and
+ * 5 non-manifold points there (4 + 4 artefacts; the other placements and E 0.016 stayed
+ * clean), so a quick run keeps that case beside its usual irrational placement. */
 Test(thin, horn_cyclide_under_a_bound, .timeout = 120)
 {
     const test_surface *hs = &TEST_SURFACES[6];
     const int dmax = 8;
     const double rel[2] = {2e-3, 5e-4};
-    for (int w = pf_first_box() - 1; w < 2; w++)
+    for (int w = -1; w < 2; w++)
         for (int e = 0; e < 2; e++) {
+            if (w < pf_first_box() - 1 && !(w == -1 && e == 0))
+                continue; /* quick: placement 1, and the own box at E 0.064 */
             double box[6];
             pf_sweep_box(hs->box, dmax, w, box);
             char what[96];
