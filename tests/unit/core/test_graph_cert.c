@@ -10,6 +10,7 @@
  * axis meeting f = 0 twice. The mutations each test catches: graph32's notes. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <stdio.h>
 #include "poly_fixture.h"
 #include "core/eval/eval.h"
 #include "core/eval/interval_jet.h"
@@ -254,4 +255,45 @@ Test(graph_cert, refuses_a_crossing_that_folds)
     gc_case c = {"min((x - 0.3)^2 + y^2 + z^2 - 0.04, (x + 0.3)^2 + y^2 + z^2 - 0.04)",
                  {-0.6, -0.25, -0.25}, {0.6, 0.25, 0.25}, false};
     check_refused(&c);
+}
+
+/* f = x³/3 + δx − c over x in [0, 1] (its zero at x = 0.2): a graph along x (premise
+ * sampled), ∂f/∂x = x² + δ in [δ, 1 + δ] with the other partials 0, so ∇f · d clears 0 along
+ * d = x by δ of the largest term, 1 + δ (on the halves holding the zero by δ of 0.25 + δ; the
+ * far halves are above 0). graph_cert.c's margin, MIN_SLOPE_FRACTION = 1e-3 of that term
+ * (against rounding), refuses δ = 1e-4, though the enclosure's lower slope is above 0, and
+ * takes δ = 1e-2. Trusting the sign alone (no margin) certifies δ = 1e-4. */
+static void check_margin(double delta, bool proved)
+{
+    char expr[128];
+    snprintf(expr, sizeof expr, "x^3/3 + %.17g*x - %.17g", delta, 0.008 / 3 + 0.2 * delta);
+    gc_case c = {expr, {0, -0.5, -0.5}, {1, 0.5, 0.5}, true};
+    pf_surface sf = {expr, NULL, 0, NULL, 0};
+    ism_tape *t = pf_compile(&sf);
+    ism_eval_ws *ws = ism_eval_ws_new(t);
+    ism_ivjet_ws *jet = ism_ivjet_ws_new(t);
+    for (int p = 0; p < 3; p++) {
+        double lo[3], hi[3];
+        placed(&c, p, lo, hi);
+        cr_assert(normals_one_side(t, ws, lo, hi), "δ %g, placement %d: premise", delta, p);
+        ism_interval box[3] = {{lo[0], hi[0]}, {lo[1], hi[1]}, {lo[2], hi[2]}};
+        ism_ivgrad g;
+        cr_assert_eq(ism_eval_interval_grad(t, jet, box, NULL, NULL, &g), 0);
+        cr_assert_gt(g.d[0].lo, 0, "δ %g, placement %d: the slope along x clears 0", delta, p);
+        cr_assert_lt(g.d[0].lo, 0.02 * g.d[0].hi, "δ %g, placement %d: by little", delta, p);
+        cr_expect_eq(certified(t, lo, hi), proved, "δ %g, placement %d", delta, p);
+    }
+    ism_ivjet_ws_free(jet);
+    ism_eval_ws_free(ws);
+    ism_tape_free(t);
+}
+
+Test(graph_cert, refuses_a_slope_under_the_margin)
+{
+    check_margin(1e-4, false);
+}
+
+Test(graph_cert, proves_a_slope_over_the_margin)
+{
+    check_margin(1e-2, true);
 }
