@@ -225,17 +225,9 @@ static void make_root(ism_sampler *s, const double a[3], const double b[3], doub
     ism_sample_grad(s, r->p, r->g);
 }
 
-/* Unit-gradient agreement of two points; -2 when either gradient vanishes. */
-static double agreement_of(const double ga[3], const double gb[3], double na, double nb)
-{
-    if (!(na > 0) || !(nb > 0) || !isfinite(na) || !isfinite(nb))
-        return -2;
-    return ism_dot3(ga, gb) / (na * nb);
-}
-
 static double gradient_agreement(const double ga[3], const double gb[3])
 {
-    return agreement_of(ga, gb, ism_norm3(ga), ism_norm3(gb));
+    return ism_agreement_normed(ga, gb, ism_norm3(ga), ism_norm3(gb));
 }
 
 bool ism_segment_may_reach(ism_sampler *s, const double a[3], const double b[3], double eps)
@@ -250,39 +242,6 @@ bool ism_segment_may_reach(ism_sampler *s, const double a[3], const double b[3],
     return r.lo <= eps && r.hi >= -eps;
 }
 
-/* Does |f| fall from both ends of the segment (same sign) toward its middle, and, unless f
- * may have a crease (crease: its tape holds min/max), do the tangent lines of f there meet
- * past 0? The paper's eq. 2 reads agreeing gradients as one sheet on both ends; across a
- * C0 crease (min/max of two sheets, the seam of a CSG union) the gradients of two sheets
- * can agree to within the test while f rises from both ends to the crease and crosses 0
- * there — a pocket of the other sign that both ends miss:
- *
- *        f    tangent at a ╲   ╱ tangent at b      |f| falls from both ends toward the
- *        0 ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─     crease: search the segment for two
- *                          ╱╳╲  (f: the crease)     roots
- *        a ───────────────╱───╲─────────────── b
- *
- * Where the tangent lines meet does not tell at a crease: each sheet is curved, and its
- * tangent line from the far end of the segment can lie below it by more than the pocket is
- * deep (the double torus's seam 1e-3 off the lattice at depth 9: tangents meeting at
- * f = −1.1e-4 while f rises to +9e-5 between them, ½ f''L² = 5.8e-4 — a hole of one
- * triangle), so with min/max any fall from both ends is searched (double torus: +5% gradient
- * evaluations). A smooth f keeps the meeting test (searching every fall costs the torus 29%).
- * Costs no evaluation (the gradients at the ends are known); the search it lets through is
- * still guarded by the segment's interval. */
-static bool pocket_possible(const double a[3], const double b[3], double fa, double fb,
-                            const double ga[3], const double gb[3], bool crease)
-{
-    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
-    double side = fa < 0 ? -1 : 1, sa = ism_dot3(ga, d), sb = ism_dot3(gb, d);
-    if (!(side * sa < 0) || !(side * sb > 0))
-        return false; /* |f| does not fall from both ends toward the middle */
-    if (crease)
-        return true;
-    double t = (fb - fa - sb) / (sa - sb); /* fa + sa t = fb + sb (t - 1) */
-    return t > 0 && t < 1 && side * (fa + sa * t) < 0;
-}
-
 /* A root whose gradient turns against an end point's hints at further roots between them. */
 static int suspect_more(const double g_end[3], const double g_root[3])
 {
@@ -293,11 +252,12 @@ bool ism_segment_rootless_normed(const ism_root_params *prm, const double a[3],
                                  const double b[3], double fa, double fb, const double ga[3],
                                  const double gb[3], double na, double nb)
 {
-    if (fa == 0 || fb == 0 || !isfinite(fa) || !isfinite(fb))
+    if (ism_rootless_ends(fa, fb))
         return true;
-    /* same sign, same sheet: no root (paper eq. 2) */
-    return (fa < 0) == (fb < 0) && agreement_of(ga, gb, na, nb) > prm->gradient_test &&
-           !pocket_possible(a, b, fa, fb, ga, gb, prm->crease);
+    if (!ism_one_sheet(prm, fa, fb, ga, gb, na, nb))
+        return false;
+    double d[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]};
+    return !ism_pocket_by_slopes(fa, fb, ism_dot3(ga, d), ism_dot3(gb, d), prm->crease);
 }
 
 bool ism_segment_rootless(const ism_root_params *prm, const double a[3], const double b[3],
