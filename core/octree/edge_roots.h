@@ -65,11 +65,12 @@ static inline bool ism_one_sheet(const ism_root_params *prm, double fa, double f
 }
 
 /* Does |f| fall from both ends of the segment a→b (same sign) toward its middle — sa and sb
- * are f's slopes there, ∇f(a)·(b − a) and ∇f(b)·(b − a) — and, unless f may have a crease (crease: its tape holds min/max), do the tangent lines of f there meet
- * past 0? The paper's eq. 2 reads agreeing gradients as one sheet on both ends; across a
- * C0 crease (min/max of two sheets, the seam of a CSG union) the gradients of two sheets
- * can agree to within the test while f rises from both ends to the crease and crosses 0
- * there — a pocket of the other sign that both ends miss:
+ * are f's slopes there, ∇f(a)·(b − a) and ∇f(b)·(b − a) — and, unless f may have a crease
+ * (crease: its tape holds min/max), do the tangent lines of f there meet past 0? The
+ * paper's eq. 2 reads agreeing gradients as one sheet on both ends; across a C0 crease
+ * (min/max of two sheets, the seam of a CSG union) the gradients of two sheets can agree to
+ * within the test while f rises from both ends to the crease and crosses 0 there — a pocket
+ * of the other sign that both ends miss:
  *
  *        f    tangent at a ╲   ╱ tangent at b      |f| falls from both ends toward the
  *        0 ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─ ─     crease: search the segment for two

@@ -152,17 +152,26 @@ static inline ism_bpoint *bpoint_reserve(ism_cell_ctx *cx)
     return &cx->bp[cx->nbp++];
 }
 
-/* b as lattice point ip of the boundary with f and ∇f from its memo entry e (just asked for:
- * the entry is copied before another lookup may take its slot). */
-static inline void bpoint_fill(const ism_cell_ctx *cx, ism_bpoint *b, const int32_t ip[3],
-                               const ism_lattice_entry *e, bool ascending)
+/* b as lattice point ip, at world position p, of the boundary with f and ∇f from its memo
+ * entry e (just asked for: the entry is copied before another lookup may take its slot). */
+static inline void bpoint_fill_at(ism_bpoint *b, const int32_t ip[3], const double p[3],
+                                  const ism_lattice_entry *e, bool ascending)
 {
     memcpy(b->ip, ip, sizeof b->ip);
     b->ascending = ascending;
-    ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, b->p);
+    memcpy(b->p, p, sizeof b->p);
     b->f = e->f;
     memcpy(b->g, e->g, sizeof b->g);
     b->gn = e->gn;
+}
+
+/* bpoint_fill_at with ip's world position from the grid. */
+static inline void bpoint_fill(const ism_cell_ctx *cx, ism_bpoint *b, const int32_t ip[3],
+                               const ism_lattice_entry *e, bool ascending)
+{
+    double p[3];
+    ism_grid_point(&cx->tree->grid, (ism_ipt){{ip[0], ip[1], ip[2]}}, p);
+    bpoint_fill_at(b, ip, p, e, ascending);
 }
 
 /* Appends a lattice point of the boundary (bpoint_fill). */
@@ -186,6 +195,21 @@ static inline void tile_corners(const ism_tile *t, int32_t q[4][3])
         q[k][t->axis] = t->plane;
         q[k][u] = cu[k];
         q[k][v] = cv[k];
+    }
+}
+
+/* ... and their world positions, as ism_grid_point gives them: the tile's five coordinates
+ * (its plane, u0, u1, v0, v1) each found once, not twelve times. */
+static inline void tile_corner_points(const ism_grid *g, const ism_tile *t, double p[4][3])
+{
+    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
+    double w = ism_grid_coord(g, t->axis, t->plane);
+    double pu[2] = {ism_grid_coord(g, u, t->u0), ism_grid_coord(g, u, t->u1)};
+    double pv[2] = {ism_grid_coord(g, v, t->v0), ism_grid_coord(g, v, t->v1)};
+    for (int k = 0; k < 4; k++) {
+        p[k][t->axis] = w;
+        p[k][u] = pu[k == 1 || k == 2];
+        p[k][v] = pv[k >= 2];
     }
 }
 
@@ -274,10 +298,13 @@ static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t, bool *quiet)
     int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
     tile_corner c[4];
     int32_t q[4][3];
+    double p[4][3];
     tile_corners(t, q);
+    tile_corner_points(&cx->tree->grid, t, p);
     for (int k = 0; k < 4; k++) {
         const ism_lattice_entry *e = lattice_entry(cx, q[k]);
-        bpoint_fill(cx, &c[k].b, q[k], e, k < 2); /* sides 0 and 1 run up u and v, 2 and 3 down */
+        /* sides 0 and 1 run up u and v, 2 and 3 down */
+        bpoint_fill_at(&c[k].b, q[k], p[k], e, k < 2);
         memcpy(c[k].next, e->next, sizeof c[k].next);
     }
     /* the sides' lower corners: 0 (sides 0 and 3), 1 (side 1), 3 (side 2) */

@@ -246,3 +246,80 @@ Test(edge_roots, lanes_free_a_lane_on_an_exact_zero)
         ism_tape_free(tape);
     }
 }
+
+/* The inline rootless test of a lattice segment (ism_lattice_segment_rootless: the slopes as
+ * one product along the segment's axis) against the general one (ism_segment_rootless_normed:
+ * full dot products with b − a), the same answer on every segment: segments along each axis
+ * of a lattice of step 1/64 in the three placements (its origin as given, moved by the 1e-3
+ * shift and by the irrational one of a cell), ends drawn with f of either sign or 0, ±inf or
+ * NaN now and then, gradients with components 0, −0, ±inf or NaN now and then, and many
+ * nearly along the segment or across it (slopes of 0 or either sign), with crease on and
+ * off and gradient_test across its range (-1 .. 1, tolerances.c). The draws must reach the
+ * pocket test and see it both ways, or the sweep proves nothing about the slopes. */
+static uint64_t rl_state = 0x9e3779b97f4a7c15ull;
+
+static double rl_unit(void) /* uniform in [0, 1) */
+{
+    rl_state ^= rl_state << 13, rl_state ^= rl_state >> 7, rl_state ^= rl_state << 17;
+    return (double)(rl_state >> 11) * 0x1p-53;
+}
+
+static double rl_value(void) /* mostly ordinary, now and then 0, −0, ±inf or NaN */
+{
+    double r = rl_unit();
+    if (r < 0.04)
+        return 0.0;
+    if (r < 0.06)
+        return -0.0;
+    if (r < 0.07)
+        return INFINITY;
+    if (r < 0.08)
+        return -INFINITY;
+    if (r < 0.09)
+        return NAN;
+    return (rl_unit() - 0.5) * 4;
+}
+
+Test(edge_roots, lattice_rootless_is_the_general_test)
+{
+    const double shift[3][3] = {{0, 0, 0},
+                                {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
+                                {PF_IRR_X / 64, PF_IRR_Y / 64, PF_IRR_Z / 64}};
+    const double tests[] = {-1, 0, 0.5, 0.9, 1};
+    size_t pockets[2] = {0, 0}, cases = 0;
+    for (int pl = 0; pl < 3; pl++)
+        for (int n = 0; n < 200000; n++) {
+            int axis = n % 3, i[3];
+            double a[3], b[3], ga[3], gb[3];
+            for (int k = 0; k < 3; k++) {
+                i[k] = (int)(rl_unit() * 128) - 64;
+                a[k] = -1.0 + shift[pl][k] + (1.0 / 64) * (double)i[k];
+                b[k] = a[k];
+            }
+            b[axis] = -1.0 + shift[pl][axis] + (1.0 / 64) * (double)(i[axis] + 1 + n % 5);
+            for (int k = 0; k < 3; k++) {
+                ga[k] = rl_value();
+                gb[k] = rl_unit() < 0.5 ? ga[k] + 0.1 * rl_value() : rl_value();
+            }
+            if (n % 4 == 1) /* across the segment: slopes ±0 */
+                ga[axis] = n % 8 == 1 ? 0.0 : -0.0, gb[axis] = -ga[axis];
+            double fa = rl_value(), fb = rl_unit() < 0.7 ? fa * (0.5 + rl_unit()) : rl_value();
+            ism_root_params prm = {tests[n % 5], 1e-9, 25, n % 2 == 0};
+            double na = ism_norm3(ga), nb = ism_norm3(gb);
+            bool want = ism_segment_rootless_normed(&prm, a, b, fa, fb, ga, gb, na, nb);
+            bool got = ism_lattice_segment_rootless(&prm, axis, a, b, fa, fb, ga, gb, na, nb);
+            cr_assert_eq(got, want,
+                         "placement %d axis %d: f %g, %g; ga (%g %g %g), gb (%g %g %g), "
+                         "test %g crease %d: inline %d, general %d",
+                         pl, axis, fa, fb, ga[0], ga[1], ga[2], gb[0], gb[1], gb[2],
+                         prm.gradient_test, prm.crease, got, want);
+            if (!ism_rootless_ends(fa, fb) && ism_one_sheet(&prm, fa, fb, ga, gb, na, nb)) {
+                pockets[want ? 0 : 1]++;
+            }
+            cases++;
+        }
+    cr_expect_gt(pockets[0], cases / 100, "%zu of %zu reached the pocket test and passed",
+                 pockets[0], cases);
+    cr_expect_gt(pockets[1], cases / 100, "%zu of %zu reached the pocket test and failed",
+                 pockets[1], cases);
+}
