@@ -80,15 +80,6 @@ static bool points_alloc(int bits, ism_point_entry **points, uint64_t **filled)
  * point (weld_crease). */
 #define WELD_TOL 1e-12
 
-static bool touches_box(const dual *d, const dnode *n)
-{
-    int32_t step = ism_grid_cell_steps(&d->g, n->level), last = (int32_t)1 << d->g.depth;
-    for (int a = 0; a < 3; a++)
-        if (n->o.v[a] == 0 || n->o.v[a] + step == last)
-            return true;
-    return false;
-}
-
 /* The tree's lattice over box down to depth, and its finest step. */
 static void set_grid(dual *d, const double box[6], int depth)
 {
@@ -215,46 +206,6 @@ static bool keep_at(dual *d, int32_t i, const double p[3])
     d->heldat = room_for(d->heldat, (size_t)i + 1);
     memcpy(d->at[i], p, sizeof d->at[i]);
     return true;
-}
-
-/* Node kind (kind: classify's) after the checks near points and on the request's box:
- * empty, a surface leaf, or inner (to split; bad set when the box cuts the surface). */
-static inline __attribute__((always_inline)) int box_kind(dual *d, worker *w, dnode *n,
-                                                         corner_view *v, int kind, bool *bad)
-{
-    if (kind == DN_INNER && d->nballs &&
-        ism_dual_balls_near(d->balls, d->nballs, &d->cover, v->p[0], v->p[7],
-                            ism_grid_cell_size(&d->g, n->level)))
-        return DN_HOLE; /* not plain near a point, as small as its hole's leaves (near_point) */
-    if (has_sheet(kind) && touches_box(d, n)) {
-        if (d->inner) {
-            if (n->level < ISM_DUAL_BOX_LEVEL)
-                kind = DN_INNER; /* no larger than the margin's cells (dual_box.h) */
-        } else {
-            int clear = ism_dual_box_faces_clear(d, w, n, v);
-            if (clear < 0)
-                *bad = true; /* the box cuts the surface: its faces need the primal polygons */
-            else if (!clear)
-                kind = DN_INNER; /* split until the box's faces are proven clear */
-        }
-    }
-    return kind;
-}
-
-/* Node kind after classification and the check on the request's box: empty, a surface
- * leaf, a hole leaf round a singular point, or inner (box_kind). */
-static int leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad)
-{
-    if (d->nballs) { /* round a singular point: split, or a hole leaf (dual_balls.h) */
-        int hole = ism_dual_balls_node(d->balls, d->nballs, &d->cover, v->p[0], v->p[7],
-                                       ism_grid_cell_size(&d->g, n->level),
-                                       n->level >= d->o->max_depth);
-        if (hole == 0 || (hole == 1 && n->level < d->o->min_depth))
-            return DN_INNER;
-        if (hole == 1)
-            return DN_HOLE;
-    }
-    return box_kind(d, w, n, v, ism_dual_classify(d, w, n, v), bad);
 }
 
 /* Does node n (of side size; 0: any) lie within a singular point's limit (dual_balls.h)?
@@ -504,76 +455,6 @@ static void feet_task(void *ctx, size_t k, int thread)
     }
 }
 
-/* Children whose classify_tail takes f and ∇f's natural enclosure, at least this many,
- * take them in one batch (ism_eval_interval_grad_batch): fewer cost more than one by one
- * (interval_jet.h, ISM_IVGRAD_BATCH's figures). */
-#define BATCH_ENCLOSURES 2
-
-/* Nodes whose children one task of the split pass's last step classifies together
- * (split_task): their natural enclosures and Taylor models are batched across the nodes, so
- * the lanes' groups of four fill. One node's children alone left them part empty: the torus
- * at 1e-2 took its 1,264 natural enclosures in 344 groups and its 664 models in 216 (32 of
- * them alone), at 3.57e-3 3,088 in 960 and 856 in 416. Whole runs (bench_error mesh P E 10
- * threads=1, callgrind on ism_mesh_surface), 1 / 2 / 4 / 8 nodes a task: torus 1e-2 15.35M /
- * 15.29M / 15.04M / 14.99M, 3.57e-3 34.61M / 34.10M / 33.69M / 33.44M, sphere 1e-2 1.845M /
- * 1.845M / 1.843M / 1.843M, the same meshes. 8: 64 views (60 KB) on a task's stack. A
- * constant, so a task's nodes, and the mesh, do not depend on the threads. */
-#define SPLIT_CHUNK 8
-
-/* leaf_kind of the children kids[0..8 nodes) of `nodes` split nodes (views: their
- * corners; node j's children at 8 j ..) into kind, bad[j] set when node j's children meet
- * the request's box: every child's classify_head first (but those in empty[j], bit c:
- * node j's child c found DN_EMPTY by split_task from the masks, its view not made), then
- * the natural enclosures the undecided ones' tails take, ISM_IVGRAD_BATCH at a time (bit for
- * bit the box-by-box pass's, their records kept for the Taylor models' jets over the same
- * boxes: classify_tail takes them from v->g), then the Taylor models of those whose tails
- * will tighten made at once (ism_dual_pre_models), then the tails and box_kind. Child by
- * child near singular points (leaf_kind's balls come first). */
-static void kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views, const uint8_t *empty,
-                      size_t nodes, int *kind, bool *bad)
-{
-    size_t nk = 8 * nodes;
-    if (d->nballs) {
-        for (size_t i = 0; i < nk; i++)
-            kind[i] = leaf_kind(d, w, &kids[i], &views[i], &bad[i / 8]);
-        return;
-    }
-    int at[8 * SPLIT_CHUNK], nb = 0;
-    for (size_t i = 0; i < nk; i++) {
-        kind[i] = empty[i / 8] >> (i % 8) & 1
-                      ? DN_EMPTY
-                      : ism_dual_classify_head(d, w, &kids[i], &views[i]);
-        if (kind[i] != UNDECIDED || !tail_wants_g(d, &views[i]) || d->crease)
-            continue; /* a crease's tape has its min/max: not one the batch takes */
-        at[nb++] = (int)i;
-    }
-    int nat = 0; /* at[0..nat): natural enclosures in views (pre_g) */
-    for (int b = 0; nb - b >= BATCH_ENCLOSURES; b += ISM_IVGRAD_BATCH) {
-        int m = nb - b < ISM_IVGRAD_BATCH ? nb - b : ISM_IVGRAD_BATCH;
-        ism_interval box[ISM_IVGRAD_BATCH][3];
-        ism_ivgrad g[ISM_IVGRAD_BATCH];
-        for (int k = 0; k < m; k++)
-            ism_dual_node_box(&views[at[b + k]], box[k]);
-        if (!ism_eval_interval_grad_batch(w->s.tape, w->jet, (const ism_interval (*)[3])box,
-                                          (size_t)m, g))
-            break;
-        for (int k = 0; k < m; k++) {
-            views[at[b + k]].g = g[k];
-            views[at[b + k]].pre_g = true;
-        }
-        nat = b + m;
-    }
-    if (nat)
-        ism_dual_pre_models(w, kids, views, at, nat);
-    for (size_t i = 0; i < nk; i++) {
-        if (empty[i / 8] >> (i % 8) & 1)
-            continue; /* box_kind leaves DN_EMPTY as it is */
-        if (kind[i] == UNDECIDED)
-            kind[i] = ism_dual_classify_tail(d, w, &kids[i], &views[i]);
-        kind[i] = box_kind(d, w, &kids[i], &views[i], kind[i], &bad[i / 8]);
-    }
-}
-
 /* Node k of a split pass's block: its children's nodes and views (kids, views: 8 each) from
  * what the first two tasks left in in[k]; *empty, bit c: child c empty from the masks alone
  * (no view made). */
@@ -604,7 +485,8 @@ static void split_kids(const split_job *job, size_t k, dnode *kids, corner_view 
             n->o.v[a] += ((c >> a) & 1) * half;
         n->level = (uint8_t)(parent->level + 1);
         /* corners of one sign in a box shown free: classify_head's first answer, DN_EMPTY,
-           whatever else the view holds (not so near points: leaf_kind asks the balls first) */
+           whatever else the view holds (not so near points: ism_dual_leaf_kind asks the balls
+           first) */
         if (!d->nballs && v->corners != CORNERS_NOT_FINITE && (neg == 0 || neg == m) &&
             (known >> c & 1)) {
             *empty |= (uint8_t)(1u << c);
@@ -628,23 +510,23 @@ static void split_kids(const split_job *job, size_t k, dnode *kids, corner_view 
     }
 }
 
-/* Last task of a split pass: the children of nodes SPLIT_CHUNK k .. of the block classified
- * together (kid_kinds) from what the first two tasks left in in[]. Reads the tree, writes
- * those nodes' out[] only. */
+/* Last task of a split pass: the children of chunk k's nodes (ism_dual_chunk) of the block
+ * classified together (ism_dual_kid_kinds) from what the first two tasks left in in[]. Reads
+ * the tree, writes those nodes' out[] only. */
 static void split_task(void *ctx, size_t k, int thread)
 {
     split_job *job = ctx;
     dual *d = job->d;
     worker *w = &d->w[thread];
-    size_t lo = k * SPLIT_CHUNK, nodes = job->m - lo < SPLIT_CHUNK ? job->m - lo : SPLIT_CHUNK;
-    dnode kids[8 * SPLIT_CHUNK];
-    corner_view views[8 * SPLIT_CHUNK];
-    uint8_t empty[SPLIT_CHUNK];
-    bool bad[SPLIT_CHUNK] = {false};
-    int kind[8 * SPLIT_CHUNK];
+    size_t lo, nodes = ism_dual_chunk(job->m, k, &lo);
+    dnode kids[8 * ISM_DUAL_SPLIT_CHUNK];
+    corner_view views[8 * ISM_DUAL_SPLIT_CHUNK];
+    uint8_t empty[ISM_DUAL_SPLIT_CHUNK] = {0}; /* set by split_kids: for gcc, which cannot see it */
+    bool bad[ISM_DUAL_SPLIT_CHUNK] = {false};
+    int kind[8 * ISM_DUAL_SPLIT_CHUNK];
     for (size_t j = 0; j < nodes; j++)
         split_kids(job, lo + j, &kids[8 * j], &views[8 * j], &empty[j]);
-    kid_kinds(d, w, kids, views, empty, nodes, kind, bad);
+    ism_dual_kid_kinds(d, w, kids, views, empty, nodes, kind, bad);
     for (size_t j = 0; j < nodes; j++) {
         split_out *out = &job->out[lo + j];
         out->bad = bad[j];
@@ -684,7 +566,8 @@ static void split_pass(dual *d, const int32_t *nodes, split_out *out, size_t n)
             for (unsigned w = job.in[k].wants; w; w &= w - 1)
                 lane[job.nlanes++] = (uint32_t)(8 * k + (size_t)__builtin_ctz(w));
         ism_pool_for(d->pool, (job.nlanes + FEET_LANES - 1) / FEET_LANES, feet_task, &job, NULL);
-        ism_pool_for(d->pool, (m + SPLIT_CHUNK - 1) / SPLIT_CHUNK, split_task, &job, NULL);
+        size_t chunks = (m + ISM_DUAL_SPLIT_CHUNK - 1) / ISM_DUAL_SPLIT_CHUNK;
+        ism_pool_for(d->pool, chunks, split_task, &job, NULL);
         b += m;
     }
     free(in);
@@ -788,7 +671,7 @@ static void expand(dual *d, const int32_t *list, size_t n)
             int32_t i = cur[k], first = -1;
             int level = d->n[i].level + 1;
             int32_t half = ism_grid_cell_steps(&d->g, level);
-            if (out[k].bad) /* the box cuts the surface (leaf_kind) */
+            if (out[k].bad) /* the box cuts the surface (ism_dual_leaf_kind) */
                 decline(d, ISM_DUAL_WHY_BOX_CUT);
             for (int c = 0; c < 8; c++) {
                 ism_ipt o = d->n[i].o;
@@ -1251,7 +1134,7 @@ static enum ism_dual_status mesh_rounds(dual *d, ism_mesh *mesh, ism_dual_stats 
             q[c][a] = (c >> a & 1) * last;
     sample_corners(d, &d->w[0], (const int32_t (*)[3])q, 8, r0->f, v.p, v.n);
     bool cut = false;
-    r0->kind = (uint8_t)leaf_kind(d, &d->w[0], r0, &v, &cut);
+    r0->kind = (uint8_t)ism_dual_leaf_kind(d, &d->w[0], r0, &v, &cut);
     r0->free_kids = v.free_kids;
     if (cut)
         decline(d, ISM_DUAL_WHY_BOX_CUT);

@@ -151,6 +151,48 @@ void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const
 int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v);
 int ism_dual_classify_tail(dual *d, worker *w, dnode *n, corner_view *v);
 
+/* Node n's kind after ism_dual_classify and the checks near singular points and on the
+ * request's box: empty, a surface leaf, a hole leaf round a singular point, or inner (to
+ * split; *bad set when the box cuts the surface there: its faces need the primal polygons). */
+int ism_dual_leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad);
+
+/* Nodes whose children one task of the split pass's last step classifies together
+ * (dual.c split_task, ism_dual_kid_kinds): their natural enclosures and Taylor models are
+ * batched across the nodes, so the lanes' groups of four fill. One node's children alone left
+ * them part empty: the torus at 1e-2 took its 1,264 natural enclosures in 344 groups and its
+ * 664 models in 216 (32 of them alone), at 3.57e-3 3,088 in 960 and 856 in 416. Whole runs
+ * (bench_error mesh P E 10 threads=1, callgrind on ism_mesh_surface), 1 / 2 / 4 / 8 nodes a
+ * task: torus 1e-2 15.35M / 15.29M / 15.04M / 14.99M, 3.57e-3 34.61M / 34.10M / 33.69M /
+ * 33.44M, sphere 1e-2 1.845M / 1.845M / 1.843M / 1.843M, the same meshes. 8: split_task's
+ * frame is 68,192 bytes (gcc -fstack-usage, 64 nodes and views), on a pool thread's stack
+ * made with default attributes (core/util/pool.c): 8 MB on glibc, but 128 KB on musl, where
+ * the proofs below it (ism_dual_kid_kinds -> classify_tail) would have to fit in the rest.
+ * A constant, so a task's nodes, and the mesh, do not depend on the threads. */
+#define ISM_DUAL_SPLIT_CHUNK 8
+
+/* Of a block of m nodes cut into chunks of ISM_DUAL_SPLIT_CHUNK (the last one shorter),
+ * chunk k's first node into *lo; returns its number of nodes (k < the chunks' count). */
+static inline size_t ism_dual_chunk(size_t m, size_t k, size_t *lo)
+{
+    *lo = k * ISM_DUAL_SPLIT_CHUNK;
+    return m - *lo < ISM_DUAL_SPLIT_CHUNK ? m - *lo : ISM_DUAL_SPLIT_CHUNK;
+}
+
+/* ism_dual_leaf_kind of the children kids[0..8 nodes) of `nodes` <= ISM_DUAL_SPLIT_CHUNK
+ * split nodes (views: their corners; node j's children at 8 j ..) into kind, bad[j] set when
+ * node j's children meet the request's box (bad[0..nodes) cleared by the caller): every
+ * child's classify_head first (but those in empty[j], bit c: node j's child c found DN_EMPTY
+ * by split_task from the masks, its view not made), then the natural enclosures the
+ * undecided ones' tails take, ISM_IVGRAD_BATCH at a time (bit for bit the box-by-box pass's;
+ * each batch's records replace the previous batch's, so only the last batch's boxes find
+ * their records again when the Taylor models' jets and the tails' own run over the same boxes
+ * — those take the Hessian only, the others the whole second-order pass: a cost, not a
+ * difference, as the records are matched by box), then the Taylor models of those whose
+ * tails will tighten made at once (ism_dual_pre_models), then the tails and the box's check.
+ * Child by child near singular points (ism_dual_leaf_kind's balls come first). */
+void ism_dual_kid_kinds(dual *d, worker *w, dnode *kids, corner_view *views,
+                        const uint8_t *empty, size_t nodes, int *kind, bool *bad);
+
 /* Where surface leaf n lies on the request's box: -1 when f changes sign between its
  * corners on a face of the box (the box cuts the surface), 1 when f is proven free of 0 on
  * every such face, 0 when neither is known (split it). */

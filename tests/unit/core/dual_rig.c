@@ -12,7 +12,14 @@
 
 void dual_rig_set_up(dual_rig *r, const ism_tape *t, int i, int depth, double e)
 {
-    double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5}, box[6];
+    const double base[6] = {-1.5, -1.5, -1.5, 1.5, 1.5, 1.5};
+    dual_rig_set_up_box(r, t, base, i, depth, e);
+}
+
+void dual_rig_set_up_box(dual_rig *r, const ism_tape *t, const double base[6], int i, int depth,
+                         double e)
+{
+    double box[6];
     pf_sweep_box(base, depth, i - 1, box);
     pf_options(&r->o, box, 1, depth);
     r->o.max_error = e;

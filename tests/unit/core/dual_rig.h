@@ -18,6 +18,9 @@ typedef struct dual_rig {
 /* r for tape t: the box ±1.5 placed by i (0, 1, 2: pf_sweep_box's −1, 0, 1), depths 1 to
  * depth, error bound e; a sampler and jet workspace of its own (dual_rig_tear_down). */
 void dual_rig_set_up(dual_rig *r, const ism_tape *t, int i, int depth, double e);
+/* dual_rig_set_up over the box base (lo x, y, z, hi x, y, z) placed by i instead of ±1.5. */
+void dual_rig_set_up_box(dual_rig *r, const ism_tape *t, const double base[6], int i, int depth,
+                         double e);
 void dual_rig_tear_down(dual_rig *r);
 
 /* Node at lattice origin q, level: f and the unit gradients at its corners (bit 0 = x,

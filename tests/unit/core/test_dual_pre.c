@@ -312,3 +312,105 @@ Test(dual_pre, children_of_several_nodes_classified_together_as_one_by_one)
     }
     ism_tape_free(t);
 }
+
+/* Node q's (level) 8 children as split_task makes them (kids, views: node j's at 8 j), each
+ * classified alone on copies with the request's box's check (ism_dual_leaf_kind) into want;
+ * returns whether one of them met the cut box (its own flag, not kid_kinds'). */
+static bool children_alone(rig *r, const int32_t q[3], int level, dnode *kids,
+                           corner_view *views, int *want)
+{
+    int half = ism_grid_cell_steps(&r->r.d.g, level + 1);
+    bool bad = false;
+    for (int c = 0; c < 8; c++) {
+        int32_t k[3] = {q[0] + (c & 1) * half, q[1] + (c >> 1 & 1) * half,
+                        q[2] + (c >> 2 & 1) * half};
+        dual_rig_node(&r->r, k, level + 1, &kids[c], &views[c]);
+        dnode n = kids[c];
+        corner_view v = views[c];
+        want[c] = ism_dual_leaf_kind(&r->r.d, &r->r.w, &n, &v, &bad);
+    }
+    return bad;
+}
+
+/* The block of nq nodes q[0..nq) (level) classified chunk by chunk as split_task does
+ * (ism_dual_chunk, ism_dual_kid_kinds: the real function, not a copy of its steps), against
+ * each child alone: the chunks cover the block once, in order; every child has its kind
+ * alone, and node j's bad flag is the OR of its own children's alone, node by node. Every
+ * other child found DN_EMPTY alone is handed over as empty (split_task's masks; its view
+ * not made). Returns how many nodes met the cut box at a place > 0 of a chunk whose first
+ * node did not (what a flag put on another node of the chunk would get wrong). */
+static int compare_block(rig *r, const int32_t (*q)[3], size_t nq, int level, int placement)
+{
+    dnode kids[8 * ISM_DUAL_SPLIT_CHUNK];
+    corner_view views[8 * ISM_DUAL_SPLIT_CHUNK];
+    int kind[8 * ISM_DUAL_SPLIT_CHUNK], want[8 * ISM_DUAL_SPLIT_CHUNK], late = 0;
+    size_t next = 0, chunks = (nq + ISM_DUAL_SPLIT_CHUNK - 1) / ISM_DUAL_SPLIT_CHUNK;
+    for (size_t k = 0; k < chunks; k++) {
+        size_t lo, nodes = ism_dual_chunk(nq, k, &lo);
+        cr_assert(lo == next && nodes >= 1 && nodes <= ISM_DUAL_SPLIT_CHUNK && lo + nodes <= nq,
+                  "chunk %zu of %zu nodes: from %zu, %zu nodes", k, nq, lo, nodes);
+        next = lo + nodes;
+        uint8_t empty[ISM_DUAL_SPLIT_CHUNK] = {0};
+        bool bad[ISM_DUAL_SPLIT_CHUNK] = {false}, want_bad[ISM_DUAL_SPLIT_CHUNK];
+        for (size_t j = 0; j < nodes; j++) {
+            want_bad[j] = children_alone(r, q[lo + j], level, &kids[8 * j], &views[8 * j],
+                                         &want[8 * j]);
+            for (int c = (int)j % 2; c < 8; c += 2)
+                empty[j] |= (uint8_t)((want[8 * j + (size_t)c] == DN_EMPTY) << c);
+            late += j > 0 && want_bad[j] && !want_bad[0];
+        }
+        ism_dual_kid_kinds(&r->r.d, &r->r.w, kids, views, empty, nodes, kind, bad);
+        for (size_t i = 0; i < 8 * nodes; i++)
+            cr_assert_eq(kind[i], want[i], "placement %d, %zu nodes, chunk %zu, node %zu "
+                                           "child %zu: %d together, %d alone", placement, nq,
+                         k, i / 8, i % 8, kind[i], want[i]);
+        for (size_t j = 0; j < nodes; j++)
+            cr_assert_eq(bad[j], want_bad[j], "placement %d, %zu nodes, chunk %zu, node %zu: "
+                                              "meets the cut box %d together, %d alone",
+                         placement, nq, k, j, bad[j], want_bad[j]);
+    }
+    cr_assert_eq(next, nq, "the chunks cover %zu of %zu nodes", next, nq);
+    return late;
+}
+
+Test(dual_pre, chunks_of_nodes_classified_together_as_one_by_one_with_the_cut_box)
+{
+    /* the box's faces x = 1 and y = 1 cut the tube (radii 1 and 0.3): surface leaves there
+       meet the box (ism_dual_box_faces_clear < 0), the others not */
+    const double cut[6] = {-1.5, -1.5, -1.5, 1.0, 1.0, 1.0};
+    ism_tape *t = pf_compile(&pf_ring_torus);
+    for (int i = pf_first_box(); i < 3; i++) {
+        rig r = {.stale_kept = 0};
+        dual_rig_set_up_box(&r.r, t, cut, i, DEPTH, E);
+        int n, level = 3;
+        int32_t (*q)[3] = tube_nodes(&r, level, &n);
+        /* 8 nodes, one chunk, with only its 6th node meeting the cut box */
+        int32_t eight[ISM_DUAL_SPLIT_CHUNK][3];
+        int cut_at = -1, clear = 0;
+        for (int k = 0; k < n && (cut_at < 0 || clear < ISM_DUAL_SPLIT_CHUNK - 1); k++) {
+            dnode kids[8];
+            corner_view views[8];
+            int want[8];
+            bool bad = children_alone(&r, q[k], level, kids, views, want);
+            if (bad && cut_at < 0)
+                cut_at = k;
+            else if (!bad && clear < ISM_DUAL_SPLIT_CHUNK - 1)
+                memcpy(eight[clear < 5 ? clear : clear + 1], q[k], sizeof eight[0]), clear++;
+        }
+        cr_assert(cut_at >= 0 && clear == ISM_DUAL_SPLIT_CHUNK - 1,
+                  "placement %d: no node meeting the cut box among %d", i, n);
+        memcpy(eight[5], q[cut_at], sizeof eight[5]);
+        int late = compare_block(&r, (const int32_t (*)[3])eight, ISM_DUAL_SPLIT_CHUNK, level, i);
+        cr_assert_eq(late, 1, "placement %d: %d late nodes in the chunk of 8", i, late);
+        /* 8 k + 3 nodes: whole chunks and a last one of 3 */
+        size_t nq = (size_t)(n - 3) / 8 * 8 + 3;
+        cr_assert_geq(nq, 19);
+        late = compare_block(&r, (const int32_t (*)[3])q, nq, level, i);
+        /* the tube's nodes in z, y, x order put those on the faces x = 1 and y = 1 amid
+           others: the check must see some past a chunk's first */
+        cr_expect_gt(late, 0, "placement %d: no node past a chunk's first meets the box", i);
+        free(q);
+        dual_rig_tear_down(&r.r);
+    }
+    ism_tape_free(t);
+}
