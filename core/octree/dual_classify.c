@@ -744,7 +744,7 @@ static bool sag_split(dual *d, worker *w, const dnode *n, corner_view *v)
  * proven by interval gradients), or to be split. The interval is taken only where the
  * corners cannot decide: a node whose corners share a sign, or disagree. In two steps (a
  * split classifies a node's children's heads first, then takes the enclosures their tails
- * want in one batch: kid_kinds): classify_head answers what the corners (and sag_split)
+ * want in one batch: ism_dual_kid_kinds): classify_head answers what the corners (and sag_split)
  * decide, else UNDECIDED, and classify_tail the rest. */
 int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v)
 {

@@ -44,7 +44,7 @@ typedef struct corner_view {
      * (test_dual_pre compares both paths). */
     uint8_t corners;
     /* In (classify_tail): f and ∇f's natural enclosure over the box is in g already, taken
-     * in one batch with the node's siblings' (kid_kinds); classify_head clears it. */
+     * in one batch with the node's siblings' (ism_dual_kid_kinds); classify_head clears it. */
     bool pre_g;
     /* In (classify_tail's first tighten): the Taylor model over the box is in model already
      * (ism_dual_pre_models), pre_ok its ism_dual_taylor answer, and the natural enclosure's
@@ -93,7 +93,7 @@ static inline bool ism_dual_faces_plain(unsigned crossed)
 }
 
 /* The node's box from its corners 0 and 7: one builder, since a jet takes a batch's record
- * only for a box equal to the bit (kid_kinds's batch, classify_tail's jet). */
+ * only for a box equal to the bit (ism_dual_kid_kinds's batch, classify_tail's jet). */
 static inline void ism_dual_node_box(const corner_view *v, ism_interval box[3])
 {
     for (int a = 0; a < 3; a++)
@@ -134,18 +134,17 @@ static inline bool tail_wants_g(const dual *d, const corner_view *v)
 
 /* What node n is (f and the unit gradients at its corners in n->f and v): DN_EMPTY, a
  * surface leaf (DN_SURF, or DN_CREASE / DN_PAIR with a crease), DN_INNER (to split). In two
- * steps for a split's children (dual.c kid_kinds): ism_dual_classify_head answers what the
+ * steps for a split's children (ism_dual_kid_kinds): ism_dual_classify_head answers what the
  * corners (and sag_split) decide, else UNDECIDED, and ism_dual_classify_tail the rest (with
  * v->g taken beforehand when v->pre_g). */
 int ism_dual_classify(dual *d, worker *w, dnode *n, corner_view *v);
-/* After a batch of natural enclosures (kid_kinds: views[at[k]].pre_g for k < nb, classify_head
- * UNDECIDED), the Taylor models the tails of nodes kids[at[k]] will take (the same test
- * classify_tail makes before its first tighten) made at once (ism_dual_taylor_many), when
- * there are at least two; bit for bit what tighten would make. With each model whose jet
- * succeeded (pre_forms) it leaves its second-order form and enclosure over the node, taken
- * in lanes (ism_dual_over_many: pre_v2, pre_over, pre_over_ok), bit for bit the scalar
- * ones; the tail's node_form (empty_proven's form) and node_over (tighten's enclosure)
- * consume them once. */
+/* After a batch of natural enclosures (ism_dual_kid_kinds: views[at[k]].pre_g for k < nb,
+ * classify_head UNDECIDED), the Taylor models the tails of nodes kids[at[k]] will take (the same
+ * test classify_tail makes before its first tighten) made at once (ism_dual_taylor_many), when
+ * there are at least two; bit for bit what tighten would make. With each model whose jet succeeded
+ * (pre_forms) it leaves its second-order form and enclosure over the node, taken in lanes
+ * (ism_dual_over_many: pre_v2, pre_over, pre_over_ok), bit for bit the scalar ones; the tail's
+ * node_form (empty_proven's form) and node_over (tighten's enclosure) consume them once. */
 void ism_dual_pre_models(worker *w, const dnode *kids, corner_view *views, const int *at,
                          int nb);
 int ism_dual_classify_head(dual *d, worker *w, dnode *n, corner_view *v);
@@ -164,9 +163,10 @@ int ism_dual_leaf_kind(dual *d, worker *w, dnode *n, corner_view *v, bool *bad);
  * (bench_error mesh P E 10 threads=1, callgrind on ism_mesh_surface), 1 / 2 / 4 / 8 nodes a
  * task: torus 1e-2 15.35M / 15.29M / 15.04M / 14.99M, 3.57e-3 34.61M / 34.10M / 33.69M /
  * 33.44M, sphere 1e-2 1.845M / 1.845M / 1.843M / 1.843M, the same meshes. 8: split_task's
- * frame is 68,192 bytes (gcc -fstack-usage, 64 nodes and views), on a pool thread's stack
- * made with default attributes (core/util/pool.c): 8 MB on glibc, but 128 KB on musl, where
- * the proofs below it (ism_dual_kid_kinds -> classify_tail) would have to fit in the rest.
+ * frame is 67,008 bytes and ism_dual_kid_kinds' 1,328 (gcc -fstack-usage; 64 nodes and
+ * views), on a pool thread's stack made with default attributes (core/util/pool.c, and the
+ * caller's own thread, which runs tasks too): 8 MB on glibc, but 128 KB on musl, where the
+ * proofs below it (ism_dual_kid_kinds -> classify_tail) would have to fit in the rest.
  * A constant, so a task's nodes, and the mesh, do not depend on the threads. */
 #define ISM_DUAL_SPLIT_CHUNK 8
 

@@ -653,14 +653,14 @@ Test(dual_cert, quad_form_of_a_turned_hessian)
     }
 }
 
-/* ism_dual_taylor_many gives each box ism_dual_taylor's model to the bit, and the same answer:
- * the torus's tube cells (three sizes, on the lattice and moved off it by 1e-3 and √2 − 1 of
- * a cell) in groups of 1 to 8, with and without a batch of natural enclosures over the same
- * boxes just before (kid_kinds's order: the jets then take that batch's records and compute
- * only the Hessian). A centre's gradient taken from the wrong lane, a record of another box,
- * or a centre rounded otherwise shows as a differing bound. So do the models' forms and
- * enclosures taken at once (ism_dual_over_many: groups of 4 lanes, the last box repeated to
- * fill one) against ism_dual_second_order / ism_dual_over on each box. */
+/* ism_dual_taylor_many gives each box ism_dual_taylor's model to the bit, and the same answer: the
+ * torus's tube cells (three sizes, on the lattice and moved off it by 1e-3 and √2 − 1 of a cell) in
+ * groups of 1 to 8, with and without a batch of natural enclosures over the same boxes just before
+ * (ism_dual_kid_kinds' order: the jets then take that batch's records and compute only the
+ * Hessian). A centre's gradient taken from the wrong lane, a record of another box, or a centre
+ * rounded otherwise shows as a differing bound. So do the models' forms and enclosures taken at
+ * once (ism_dual_over_many: groups of 4 lanes, the last box repeated to fill one) against
+ * ism_dual_second_order / ism_dual_over on each box. */
 Test(dual_cert, models_made_at_once_are_the_models_made_one_by_one)
 {
     ism_tape *t = pf_compile(&pf_ring_torus);
@@ -748,7 +748,7 @@ static void expect_one_by_one(const ism_tape *t, ism_ivjet_ws *jw, const double 
 }
 
 /* ism_dual_taylor_many on some of the boxes of a batch of natural enclosures just taken, as
- * ism_dual_pre_models calls it (the children whose tails tighten, a subset of kid_kinds's
+ * ism_dual_pre_models calls it (the children whose tails tighten, a subset of ism_dual_kid_kinds's
  * batch, in its order): every subset of a batch of 1 to 8 tube cells, up to 96 of them a
  * batch size, each box's model ism_dual_taylor's to the bit. The jets then come from the
  * records of one of the batch's groups (a subset inside one group of 4: its lanes, not the

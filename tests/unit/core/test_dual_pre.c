@@ -1,5 +1,5 @@
 /* test_dual_pre.c — a split's children classified in two steps with their natural enclosures
- * and Taylor models made at once (dual.c kid_kinds: classify_head, ism_eval_interval_grad_batch,
+ * and Taylor models made at once (ism_dual_kid_kinds: classify_head, ism_eval_interval_grad_batch,
  * ism_dual_pre_models, classify_tail) against each child alone (ism_dual_classify): the same
  * kind, the same have_model and, with it, the same model to the bit, and the same enclosure
  * left in the view (the models' enclosures at once: ism_dual_over_many). The tail skips the tests
@@ -8,7 +8,9 @@
  * natural_open answer in it) reused for another child is classified as a fresh one (split_task's
  * views are not cleared between nodes: classify_head must clear those answers). The torus's
  * nodes at levels 3-5 whose box reaches the tube, in three placements
- * (tests/unit/placements.h). */
+ * (tests/unit/placements.h). And ism_dual_kid_kinds itself over chunks of split nodes
+ * (ism_dual_chunk) in a box whose faces cut the tube: every child's kind and every node's own
+ * "meets the cut box" flag as each child alone (ism_dual_leaf_kind). */
 #include <criterion/criterion.h>
 #include <math.h>
 #include <stdlib.h>
@@ -111,7 +113,7 @@ static int compare_children(rig *r, const int32_t q[3], int level, int placement
         counted[c] = views[c];
         counted[c].corners = corner_count(&kids[c], &views[c]);
     }
-    /* kid_kinds' order */
+    /* ism_dual_kid_kinds' order */
     ism_interval box[8][3];
     ism_ivgrad g[8];
     for (int c = 0; c < 8; c++) {
@@ -217,11 +219,11 @@ Test(dual_pre, children_classified_at_once_as_one_by_one)
     ism_tape_free(t);
 }
 
-/* Nodes whose children one test call classifies together, as split_task's SPLIT_CHUNK. */
+/* Nodes whose children one test call classifies together (split_task: ISM_DUAL_SPLIT_CHUNK). */
 #define MANY 3
 
-/* The children of the nq <= MANY nodes at q[0..nq) (level) classified together, as split_task
- * does across its nodes (dual.c kid_kinds: every head, the natural enclosures
+/* The children of the nq <= MANY nodes at q[0..nq) (level) classified together by the steps
+ * of ism_dual_kid_kinds taken here one by one (every head, the natural enclosures
  * ISM_IVGRAD_BATCH at a time, then ism_dual_pre_models over all of them at once), against each
  * child alone: the same kind and the same model to the bit. And every child whose tail would
  * tighten (ism_dual_pre_models' answer kept in its view: pre_open) took its model at once,
@@ -315,7 +317,7 @@ Test(dual_pre, children_of_several_nodes_classified_together_as_one_by_one)
 
 /* Node q's (level) 8 children as split_task makes them (kids, views: node j's at 8 j), each
  * classified alone on copies with the request's box's check (ism_dual_leaf_kind) into want;
- * returns whether one of them met the cut box (its own flag, not kid_kinds'). */
+ * returns whether one of them met the cut box (its own flag, not ism_dual_kid_kinds'). */
 static bool children_alone(rig *r, const int32_t q[3], int level, dnode *kids,
                            corner_view *views, int *want)
 {
