@@ -200,7 +200,8 @@ INLINE void grad_step_op(int op, const ism_instr *code, double *regs, ism_trig_c
         v4d c = {in->imm, in->imm, in->imm, in->imm};
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++)
-            v4_st(ov + g * VL, op == ISM_OP_ADD_RC ? v4_ld(av + g * VL) + c : v4_ld(av + g * VL) * c);
+            v4_st(ov + g * VL,
+                  op == ISM_OP_ADD_RC ? v4_ld(av + g * VL) + c : v4_ld(av + g * VL) * c);
         chain_partials(regs, in, NULL, op == ISM_OP_ADD_RC ? 1.0 : in->imm, ng);
         return;
     }
@@ -212,15 +213,15 @@ INLINE void grad_step_op(int op, const ism_instr *code, double *regs, ism_trig_c
         #pragma GCC unroll 4
         for (size_t g = 0; g < ng; g++) {
             v4d a = v4_ld(av + g * VL);
-            v4_st(ov + g * VL, op == ISM_OP_COPY  ? a
-                            : op == ISM_OP_NEG ? -a
-                            : op == ISM_OP_SUB_CR ? c - a
-                                                      : a / c);
+            v4_st(ov + g * VL, op == ISM_OP_COPY     ? a
+                               : op == ISM_OP_NEG    ? -a
+                               : op == ISM_OP_SUB_CR ? c - a
+                                                     : a / c);
         }
         chain_partials(regs, in, NULL,
                        op == ISM_OP_COPY     ? 1.0
                        : op == ISM_OP_DIV_RC ? 1.0 / in->imm
-                                                 : -1.0,
+                                             : -1.0,
                        ng);
         return;
     }
@@ -317,12 +318,13 @@ INLINE void load_inputs(double *regs, const double *const src[3], size_t n, size
  * (copies: the bits as they are) where twelve scalar loads and stores were. */
 INLINE void store_group_grads(double (*g)[3], v4d x, v4d y, v4d z)
 {
+    double *flat = &g[0][0]; /* g[0..4) of a contiguous double[n][3], as 12 in a row */
     v4d xy01 = __builtin_shuffle(x, y, (v4i){0, 4, 1, 5}); /* x0 y0 x1 y1 */
     v4d xy23 = __builtin_shuffle(x, y, (v4i){2, 6, 3, 7}); /* x2 y2 x3 y3 */
     v4d mid = __builtin_shuffle(xy01, xy23, (v4i){3, 3, 4, 5}); /* y1 y1 x2 y2 */
-    v4_st(&g[0][0], __builtin_shuffle(xy01, z, (v4i){0, 1, 4, 2}));
-    v4_st(&g[1][1], __builtin_shuffle(mid, z, (v4i){0, 5, 2, 3}));
-    v4_st(&g[2][2], __builtin_shuffle(xy23, z, (v4i){6, 2, 3, 7}));
+    v4_st(flat, __builtin_shuffle(xy01, z, (v4i){0, 1, 4, 2}));
+    v4_st(flat + 4, __builtin_shuffle(mid, z, (v4i){0, 5, 2, 3}));
+    v4_st(flat + 8, __builtin_shuffle(xy23, z, (v4i){6, 2, 3, 7}));
 }
 
 /* f and the gradient of the first n lanes of register res. */
@@ -348,8 +350,8 @@ INLINE void store_results(const double *regs, uint32_t res, double *f, double (*
     }
 }
 
-/* The tape's steps over ng groups (inlined into each caller, so that a constant ng unrolls
- * grad_step's loops over the groups). */
+/* The tape's steps over ng groups: the baseline's loop (the AVX2 clone threads it:
+ * THREADED_RUN). */
 INLINE void run_tape_n(const ism_tape *t, double *regs, ism_trig_cache *trig, size_t ng)
 {
     for (size_t i = 0; i < t->len; i++)
@@ -362,9 +364,8 @@ static inline size_t groups(size_t n)
     return (n + VL - 1) / VL;
 }
 
-/* One chunk of n points in ng groups: inputs, the tape's steps, results (inlined into each
- * caller, so that a constant ng unrolls grad_step's loops over the groups and the inputs' and
- * results' copies). */
+/* One chunk of n points in ng groups: inputs, the tape's steps, results: the baseline's
+ * (the AVX2 clone's is CHUNK_THREADED). */
 INLINE void chunk_n(const ism_tape *t, double *regs, ism_trig_cache *trig,
                     const double *const src[3], double *f, double (*g)[3], size_t n, size_t ng)
 {
@@ -442,6 +443,8 @@ ISM_THREADED_COMPLETE(GRAD_STEPS, "GRAD_STEPS names every operation (THREADED_ST
         const ism_instr *in = t->code, *const end = t->code + t->len;                       \
         goto *next_step[in->op];                                                            \
         GRAD_STEPS(GRAD_BODY)                                                               \
+        /* codes past the list: grad_step's default arm, as the baseline's switch (no       \
+           compiled tape holds one: this arm has no test) */                                \
         GRAD_BODY(BAD, RARE)                                                                \
     }
 THREADED_RUN(run_tape_1_avx2, 1)

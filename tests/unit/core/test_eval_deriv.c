@@ -238,15 +238,22 @@ Test(eval_deriv, crease_branches_through_one_operand_steps)
     /* 2 max(x, y^2) - 1 at (0.3, 0.6, 0.1): 2x - 1 = -0.4, ∇ (2, 0, 0); 2y^2 - 1 = -0.28,
        ∇ (0, 4y, 0) = (0, 2.4, 0); sqrt(max(x, y^2) + 3): sqrt(3.3), ∇ (1/(2 sqrt 3.3), 0, 0)
        and sqrt(3.36), ∇ (0, 2y/(2 sqrt 3.36), 0) */
-    const char *exprs[2] = {"2*max(x, y^2) - 1", "sqrt(max(x, y^2) + 3)"};
+    /* max(x, y^2) * 2: a tail of one step (branches_at's `if (after)`): 0.6, ∇ (2, 0, 0);
+       0.72, ∇ (0, 4y, 0) = (0, 2.4, 0) */
+    const char *exprs[3] = {"2*max(x, y^2) - 1", "sqrt(max(x, y^2) + 3)", "max(x, y^2) * 2"};
+    const size_t tail[3] = {2, 2, 1}; /* the steps after the max */
     const double x = 0.3, y = 0.6, z = 0.1;
-    const double want[2][2][4] = {
+    const double want[3][2][4] = {
         {{-0.4, 2, 0, 0}, {-0.28, 0, 2.4, 0}},
         {{sqrt(3.3), 0.5 / sqrt(3.3), 0, 0}, {sqrt(3.36), 0, y / sqrt(3.36), 0}},
+        {{0.6, 2, 0, 0}, {0.72, 0, 2.4, 0}},
     };
-    for (int e = 0; e < 2; e++) {
+    for (int e = 0; e < 3; e++) {
         ism_tape *t = ism_tape_compile(exprs[e], NULL, 0, NULL, 0, NULL, &err);
         cr_assert_not_null(t, "%s", exprs[e]);
+        cr_assert_gt(t->len, tail[e], "%s", exprs[e]);
+        cr_expect_eq(t->code[t->len - 1 - tail[e]].op, ISM_OP_MAX_RR, "%s: a tail of %zu",
+                     exprs[e], tail[e]);
         ism_eval_ws *ws = ism_eval_ws_new(t);
         double val[2], g[2][3];
         cr_expect_not(ism_eval_top_branches(t, ws, x, y, z, val, g), "%s", exprs[e]);

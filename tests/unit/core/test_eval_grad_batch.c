@@ -35,6 +35,10 @@ static const char *const EXPRS[] = {
     /* a product keeps the sign of a zero factor: -0 from any of the 4-lane arithmetic
        ops (constant minus, sub, add, add and mul by a constant, mul, square) shows in f */
     "(2 - x) * (z - x) * (x + y) * (y + 1) * (z * 0.5) * (x * y) * y^2",
+    /* a bare leaf compiles to an empty tape (emit.c): f = x, g = (1, 0, 0), the inputs'
+       registers as loaded; the threaded loops' `if (!t->len)` guard keeps them off code[0] */
+    "x",
+    "z",
 };
 
 /* Points in [-1.5, 1.5]^3, every seventh on a special value (0, ±1, a tie x = y = z), every
