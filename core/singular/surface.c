@@ -23,27 +23,16 @@ static double finest_cell(const double box[6], int depth)
 
 /* Under max_error the singular stage's scale (locus search depth, conformance tube and
  * balls, the curves' split cells) is the first depth whose cell c is at most this many E, not
- * depth.max, which is then only a safety limit. The error argument: the tube's triangles span
- * about a cell of a sheet, and a flat chord of span c on a sheet of curvature radius R sags
- * c^2 / (8R), which is <= E while R >= (c / E) c / 8: with c <= k E that is every sheet whose
- * radius is at least k/8 of a cell. 4 (R >= c/2) was the first value that kept Klein bottle
- * at E 1e-2 (box 8) at depth 8 (3.1 E; depth 7 is 6.25 E) and was checked by measurement
- * only. 4.6 (R >= 0.575 c) moves cube boxes under the default bound (E = 1e-3 diagonal)
- * from depth 8 (2.26 E) to 7 (4.51 E), where the depth path already runs: the presets'
- * sheets beside their loci have radii of many cells there. Checked: pinch_error's exact
- * distances <= E, the singular/conform/tube_folds/curve_cert suites, and sweep_singular's
- * bounded rows (E = 1e-3 diagonal, depth.max 10) on the singular presets in the own, +1e-3
- * and irrational boxes: counts as at depth 10, 0 artefacts, every centroid/midpoint within E.
- * Klein at E 1e-2 and at E 1e-3 (box 8) keep depths 8 and 11. 5 (R >= 0.625 c): the depth
- * steps by 2, so the cell lands anywhere in (k/2, k] E, and Klein at E 3.27e-3 (box 8) took
- * depth 10 at 4.6 (cell 2.39 E; depth 9 is 4.78 E): a tube half the width the bound allows,
- * 33,356 of its 86,632 triangles the refill's and 64,476 more cut out of the polygoniser's
- * (callgrind, ism_mesh_surface, one thread: 2,611.0M); at 5 it takes depth 9: 61,172
- * triangles (refill 15,040), 1,882.2M, max centroid / midpoint distance the same 0.00275 /
- * 0.00327 (the worst lie off the tube). Measured: Klein within E with the topology of depth
- * 10 in the three placements at 4.78 E (test_singular_depth.c) and still at 9.6 E (k 10:
- * depth 8), and at E 1e-2 at 6.25 E (k 6.3: depth 7, midpoint 0.998 E); sweep_singular's
- * bounded rows at R = 8.14e-4 (cell 4.8 E: depth 8 instead of 9) on the singular presets. */
+ * depth.max, which is then only a safety limit. Depths step by 2, so the cell used lands
+ * anywhere in (k/2, k] E. k trades the tube's width against its cost: a narrower tube means
+ * more refill triangles and more of the polygoniser's cut out. It is not what keeps E: the
+ * octree's error measure and refinement (core/octree/refine.h) and the conformance refill's
+ * own measure against E do that, near points and curves too. A flat chord of span c on a
+ * sheet of curvature radius R sags c^2 / (8R) <= E while R >= k c / 8, which covers the
+ * smooth sheets beside a double curve but not the cells within about c of a node or pinch
+ * point, where R goes to 0. Evidence: at a cell of 4.97 E Whitney, cross-cap, Kummer-4 and the
+ * double cone stay within E with the points and curves of k = 4.6 (own and +1e-3 boxes;
+ * test_pinch_error.c whitney_at_the_coarsest_singular_cell), and Klein still at 19 E. */
 #define SINGULAR_CELLS_PER_E 5.0
 /* ... and never shallower than the locus search's own default depth, at which every
  * preset's points and curves are found: a coarse E must not make the search miss one. */

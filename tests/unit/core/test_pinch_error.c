@@ -28,6 +28,7 @@
 #include "core/analysis/analysis.h"
 #include "core/eval/eval.h"
 #include "core/singular/locus.h"
+#include "core/singular/surface.h"
 #include "core/util/vec3.h"
 #include "tests/unit/core/poly_fixture.h"
 #include "tests/unit/core/param_dist.h"
@@ -236,11 +237,47 @@ Test(pinch_error, whitney)
  * with an edge in f = 0 (the fold line x = 0 on z = 0) kept the old reading. */
 #define WHITNEY_OWN_FACTOR 1.5
 
-/* The Whitney umbrella x² − y²z at the default bound (1e-3 × the box diagonal, passed), depth
- * 3..10, in the three boxes: the exact distance (param_dist) at centroids and midpoints
- * within E; one component with non-manifold edges (the double line, z > 0); one certified
- * pinch point, at the origin, a double curve above it and the handle (a
- * whisker) below; and the own box's triangles at most WHITNEY_OWN_FACTOR × the shifted boxes'. */
+/* The Whitney umbrella x² − y²z meshed at E in `box` (placement `which`), depth 3..10: the exact
+ * distance (param_dist) at centroids and midpoints within E; χ 1 and one component with
+ * non-manifold edges (the double line, z > 0); one certified pinch point, at the origin, a
+ * double curve above it and the handle (a whisker) below. Returns the mesh's triangles. */
+static size_t expect_whitney(const ism_tape *t, const param_dist *r, const double box[6],
+                             double E, int which, const char *what)
+{
+    ism_mesh m;
+    ism_locus l;
+    pf_run_surface_bounded(t, box, 3, 10, E, &m, &l);
+    double exact[2];
+    exact_worst(&m, r, exact);
+    pf_props p;
+    pf_measure(&m, t, &p);
+    cr_log_info("whitney %s E %g box %d: %zu triangles, exact centroid %.4f E midpoint %.4f E, "
+                "χ %ld", what, E, which, m.ntris, exact[0] / E, exact[1] / E, p.euler);
+    cr_expect_leq(fmax(exact[0], exact[1]), E, "whitney %s E, box %d: a point %.4f E from "
+                  "f = 0", what, which, fmax(exact[0], exact[1]) / E);
+    cr_expect(p.components == 1 && p.nonmanifold_edges > 0 && p.euler == 1, "whitney %s box "
+              "%d: %zu components, %zu non-manifold edges, χ %ld", what, which, p.components,
+              p.nonmanifold_edges, p.euler);
+    size_t pinch = 0, dbl = 0, whisker = 0;
+    for (size_t i = 0; i < l.npoints; i++)
+        pinch += l.points[i].type == ISM_SING_PINCH && l.points[i].certified &&
+                 ism_norm3(l.points[i].p) <= 1e-9 * 2 * sqrt(3);
+    for (size_t i = 0; i < l.ncurves; i++) {
+        dbl += l.curves[i].kind == ISM_CURVE_DOUBLE;
+        whisker += l.curves[i].kind == ISM_CURVE_WHISKER;
+    }
+    cr_expect(l.npoints == 1 && pinch == 1 && l.ncurves == 2 && dbl == 1 && whisker == 1,
+              "whitney %s box %d: %zu points (%zu the pinch point), %zu curves (%zu double, "
+              "%zu whiskers)", what, which, l.npoints, pinch, l.ncurves, dbl, whisker);
+    size_t n = m.ntris;
+    ism_locus_free(&l);
+    ism_mesh_free(&m);
+    return n;
+}
+
+/* The Whitney umbrella at the default bound (1e-3 × the box diagonal, passed), depth 3..10, in
+ * the three boxes: expect_whitney's checks, and the own box's triangles at most
+ * WHITNEY_OWN_FACTOR × the shifted boxes'. */
 Test(pinch_error, whitney_own_box_costs_what_shifted_boxes_do)
 {
     static const double base[6] = {-1, -1, -1, 1, 1, 1};
@@ -251,42 +288,41 @@ Test(pinch_error, whitney_own_box_costs_what_shifted_boxes_do)
     for (int which = pf_first_box() - 1; which <= 1; which++) {
         double box[6];
         pf_sweep_box(base, 10, which, box);
-        double E = pf_default_error(box);
-        ism_mesh m;
-        ism_locus l;
-        pf_run_surface_bounded(t, box, 3, 10, E, &m, &l);
-        tris[which + 1] = m.ntris;
-        double exact[2];
-        exact_worst(&m, r, exact);
-        pf_props p;
-        pf_measure(&m, t, &p);
-        cr_log_info("whitney default E %g box %d: %zu triangles, exact centroid %.4f E "
-                    "midpoint %.4f E, χ %ld", E, which, m.ntris, exact[0] / E, exact[1] / E,
-                    p.euler);
-        cr_expect_leq(fmax(exact[0], exact[1]), E, "whitney default E, box %d: a point %.4f E "
-                      "from f = 0", which, fmax(exact[0], exact[1]) / E);
-        cr_expect(p.components == 1 && p.nonmanifold_edges > 0, "whitney box %d: %zu "
-                  "components, %zu non-manifold edges", which, p.components,
-                  p.nonmanifold_edges);
-        size_t pinch = 0, dbl = 0, whisker = 0;
-        for (size_t i = 0; i < l.npoints; i++)
-            pinch += l.points[i].type == ISM_SING_PINCH && l.points[i].certified &&
-                     ism_norm3(l.points[i].p) <= 1e-9 * 2 * sqrt(3);
-        for (size_t i = 0; i < l.ncurves; i++) {
-            dbl += l.curves[i].kind == ISM_CURVE_DOUBLE;
-            whisker += l.curves[i].kind == ISM_CURVE_WHISKER;
-        }
-        cr_expect(l.npoints == 1 && pinch == 1 && l.ncurves == 2 && dbl == 1 && whisker == 1,
-                  "whitney box %d: %zu points (%zu the pinch point), %zu curves (%zu double, "
-                  "%zu whiskers)", which, l.npoints, pinch, l.ncurves, dbl, whisker);
-        ism_locus_free(&l);
-        ism_mesh_free(&m);
+        tris[which + 1] = expect_whitney(t, r, box, pf_default_error(box), which, "default");
     }
     if (tris[0] > 0) { /* the own box ran (not under ISOMESH_TEST_QUICK) */
         size_t shifted = tris[1] > tris[2] ? tris[1] : tris[2];
         cr_expect_leq((double)tris[0], WHITNEY_OWN_FACTOR * (double)shifted, "whitney: %zu "
                       "triangles in its own box, %zu / %zu in the shifted ones", tris[0],
                       tris[1], tris[2]);
+    }
+    param_dist_free(r);
+    ism_tape_free(t);
+}
+
+/* The Whitney umbrella where the singular stage's cell is widest for its bound: box ±1 at
+ * E = 1.572e-3, so that ism_singular_depth takes depth 8, cell 2/256 = 4.97 E, just under
+ * core/singular/surface.c's 5 E (depth 7 would be 9.9 E). The tube, balls and refill are then
+ * as coarse beside a pinch point, where the sheets' curvature radius goes to 0, as the rule
+ * ever makes them; expect_whitney's checks (exact distance within E, χ 1, one component, the
+ * pinch point, the double curve and the whisker) in the three placements. It does not pick
+ * k (k = 4.6 or 20 pass too: revF32 measured the error held by the refinement and the
+ * conformance, not by k); it guards the cone and pinch path at the coarsest tube the rule
+ * allows. */
+Test(pinch_error, whitney_at_the_coarsest_singular_cell)
+{
+    static const double base[6] = {-1, -1, -1, 1, 1, 1};
+    const double E = 1.572e-3;
+    ism_tape *t = pf_compile(&(pf_surface){"x^2 - y^2*z", NULL, 0, NULL, 0});
+    param_dist *r = param_dist_new(PARAM_WHITNEY);
+    cr_assert(r);
+    for (int which = pf_first_box() - 1; which <= 1; which++) {
+        ism_poly_options o;
+        pf_options(&o, base, 3, 10);
+        pf_sweep_box(base, 10, which, o.box);
+        o.max_error = E;
+        cr_expect_eq(ism_singular_depth(&o), 8, "box %d: the singular depth", which);
+        expect_whitney(t, r, o.box, E, which, "4.97-cell");
     }
     param_dist_free(r);
     ism_tape_free(t);
