@@ -42,12 +42,12 @@ static uint64_t pack(int level, const int64_t c[3])
            (uint64_t)c[1] << COORD_BITS | (uint64_t)c[2];
 }
 
-/* floor((x − lo) / s) clamped to [0, COORD_MAX] (0 for a NaN; three per triangle filed, six
- * per level of every query). */
 /* Bits of the occupied filter per triangle of the mesh at cf_tgrid_init (at least
- * OCCUPIED_MIN): a grid holds at most a cell per triangle, so at most a quarter of the bits
- * are set and a query's probe of an empty cell (most of those it reads: the surface is thin
- * in its box) is skipped three times in four at least. */
+ * OCCUPIED_MIN): a grid holds at most a cell per triangle, so of the mesh at init at most a
+ * quarter of the bits are set and a query's probe of an empty cell (most of those it reads:
+ * the surface is thin in its box) is skipped three times in four at least. The filter is not
+ * resized: triangles filed later (cf_tgrid_add from the refill and zip, split_over's halves)
+ * may set more bits, which costs only speed (a set bit only lets the probe run). */
 #define OCCUPIED_PER_TRI 4
 #define OCCUPIED_MIN 4096 /* 2^12 */
 
@@ -64,6 +64,8 @@ static inline bool maybe_occupied(const cf_tgrid *g, uint64_t key)
     return g->occupied[b >> 6] >> (b & 63) & 1;
 }
 
+/* floor((x − lo) / s) clamped to [0, COORD_MAX] (0 for a NaN; three per triangle filed, six
+ * per level of every query). */
 static int64_t coord(const cf_tgrid *g, double x, int k, double s)
 {
     return cf_floor_clamped((x - g->lo[k]) / s, (int64_t)COORD_MAX + 1);

@@ -522,7 +522,8 @@ typedef struct cf_edge_table {
     size_t cap_slot;
 } cf_edge_table;
 
-/* Empties t with room for max edges; false when out of memory (room for none then). */
+/* Empties t with room for max edges (at most ISM_KEY_NONE), every slot empty and more slots
+ * than room (twice); false when out of memory (room for none then). */
 bool cf_edge_table_start(cf_edge_table *t, size_t max);
 void cf_edge_table_free(cf_edge_table *t);
 

@@ -46,6 +46,7 @@
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 
+#include <assert.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -513,12 +514,19 @@ enum { MID_PREFETCHED = 1, MID_MEASURED = 2 };
 /* Slots of the smallest table (a power of two: 2^6). */
 #define EDGE_SLOTS_MIN 64
 
+/* Room for at most ISM_KEY_NONE edges, so no number (0 .. ISM_KEY_NONE − 1) reads as an empty
+ * slot (a round's 3 ntri edges pass it only beyond 1.4e9 triangles). Slots at least twice the
+ * room: half of them stay empty however full the table, and cf_edge_table_add's probe, which
+ * stops only at an empty slot (the room is checked after it), relies on slots > max to end. */
 bool cf_edge_table_start(cf_edge_table *t, size_t max)
 {
+    if (max > ISM_KEY_NONE)
+        max = ISM_KEY_NONE;
     size_t slots = EDGE_SLOTS_MIN;
     int shift = 64 - 6;
     for (; slots < 2 * max; slots *= 2)
         shift--;
+    assert(slots > max);
     t->n = t->max = 0;
     if (!ism_grow((void **)&t->slot, &t->cap_slot, slots, sizeof *t->slot, slots))
         return false;

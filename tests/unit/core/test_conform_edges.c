@@ -21,7 +21,7 @@ static size_t list_find(const uint32_t (*seen)[2], size_t n, uint32_t a, uint32_
     return n;
 }
 
-Test(conform_edges, numbers_as_a_list_of_first_additions)
+Test(conform_edges, numbers_as_a_list_of_first_additions, .timeout = 10)
 {
     static uint32_t seen[MAX_EDGES][2];
     cf_edge_table t = {0};
@@ -53,24 +53,56 @@ Test(conform_edges, numbers_as_a_list_of_first_additions)
     cf_edge_table_free(&t);
 }
 
-Test(conform_edges, full_table_holds_what_it_has)
+/* Whether t, just started with room for max, is as cf_edge_table_start promises: nothing added,
+ * every slot empty and twice the room in slots (so cf_edge_table_add's probe, which stops only
+ * at an empty slot, ends). Checked slot by slot, so a table left with stale or unset slots
+ * fails here instead of hanging a probe. */
+static void assert_started_empty(const cf_edge_table *t, size_t max)
+{
+    size_t slots = (size_t)1 << (64 - t->shift);
+    cr_assert_eq(t->n, 0u);
+    cr_assert_eq(t->max, max);
+    cr_assert_geq(slots, 2 * max, "%zu slots for room %zu", slots, max);
+    for (size_t j = 0; j < slots; j++)
+        cr_assert_eq(t->slot[j].index, ISM_KEY_NONE, "slot %zu of %zu not empty", j, slots);
+}
+
+/* Fills t (just started with room for max) with the edges (i + base, i + base + 1), numbered
+ * 0 .. max − 1; then a new edge finds no room while every held edge is still found, either
+ * way round. */
+static void fill_and_check(cf_edge_table *t, size_t max, uint32_t base)
+{
+    bool added;
+    for (uint32_t i = 0; i < max; i++) {
+        cr_assert_eq(cf_edge_table_add(t, base + i, base + i + 1, &added), i);
+        cr_assert(added, "edge %u of %zu not added", i, max);
+    }
+    cr_assert_eq(cf_edge_table_add(t, base + 7, base + 9, &added), ISM_KEY_NONE);
+    cr_assert_not(added);
+    for (uint32_t i = 0; i < max; i++) {
+        cr_assert_eq(cf_edge_table_add(t, base + i + 1, base + i, &added), i);
+        cr_assert_not(added);
+    }
+}
+
+/* The timeout turns a probe that never meets an empty slot into a failure, not a hang. */
+Test(conform_edges, full_table_holds_what_it_has, .timeout = 10)
 {
     cf_edge_table t = {0};
     cr_assert(cf_edge_table_start(&t, 5));
-    bool added;
-    for (uint32_t i = 0; i < 5; i++) {
-        cr_assert_eq(cf_edge_table_add(&t, i, i + 1, &added), i);
-        cr_assert(added);
-    }
-    cr_assert_eq(cf_edge_table_add(&t, 7, 9, &added), ISM_KEY_NONE);
-    cr_assert_not(added);
-    for (uint32_t i = 0; i < 5; i++) {
-        cr_assert_eq(cf_edge_table_add(&t, i + 1, i, &added), i);
-        cr_assert_not(added);
-    }
-    /* started again: empty, numbered from 0 */
+    assert_started_empty(&t, 5);
+    fill_and_check(&t, 5, 0);
+    /* started again: empty, the same five edges new again and numbered from 0 */
     cr_assert(cf_edge_table_start(&t, 5));
-    cr_assert_eq(cf_edge_table_add(&t, 3, 4, &added), 0u);
-    cr_assert(added);
+    assert_started_empty(&t, 5);
+    fill_and_check(&t, 5, 0);
+    /* room of the smallest table's slots (EDGE_SLOTS_MIN, 64) and past it, after a larger
+     * table: the slots must still outnumber the room */
+    size_t rooms[] = {64, 65, 31, 64};
+    for (size_t k = 0; k < sizeof rooms / sizeof *rooms; k++) {
+        cr_assert(cf_edge_table_start(&t, rooms[k]));
+        assert_started_empty(&t, rooms[k]);
+        fill_and_check(&t, rooms[k], 100 * (uint32_t)k);
+    }
     cf_edge_table_free(&t);
 }
