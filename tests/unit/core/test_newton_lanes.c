@@ -10,7 +10,9 @@
  * (its double curve), Steiner's Roman surface (three double lines through a triple point),
  * Kummer's 16 nodes and the cross-cap, in the three placements (pf_sweep_box).
  * Since both drivers share their steps, also one answer from outside: runs started beside
- * Kummer's 16 nodes end on their closed-form coordinates.
+ * Kummer's 16 nodes end on their closed-form coordinates. And starts where the Hessian is
+ * not finite (sqrt and log at 0, 1/x at 0, a term past the double range): the Hessian at the
+ * start is still ism_eval_hessian's there, bit for bit, in lanes and alone.
  *
  * And the pseudo-inverse step in lanes (sym3_lanes.h) against ism_sym3_pinv_step on
  * matrices chosen to take every path of the sweeps: random ones over many scales, diagonal
@@ -203,6 +205,57 @@ Test(newton_lanes, kummer_16_nodes_closed_form)
     }
     ism_eval_ws_free(ws);
     ism_tape_free(t);
+}
+
+/* Tapes and starts where f's Hessian at the start is NaN or infinite (or its gradient is):
+ * each run's start_hess, alone and in lanes, is ism_eval_hessian's at the start, bit for bit
+ * (search.c centre_rank ranks an unconverged candidate by it), and the two drivers end alike. */
+Test(newton_lanes, non_finite_starts)
+{
+    static const char *const src[] = { "sqrt(x) + y^2 + z^2 - 1", "1/x + y^2 + z^2 - 1",
+                                       "log(x) + y^2 + z^2", "x^2*y^2 + z^2 - 1e300*x^4" };
+    enum { NS = 6 };
+    static const double start[NS][3] = { { 0, 0.5, 0.5 }, { 0, 0, 0 }, { -1, 0.1, 0.2 },
+                                         { 1e100, 1e100, 0 }, { 0.25, 0.25, 0 },
+                                         { -0.0, 0.3, 0.1 } };
+    int non_finite = 0;
+    for (size_t f = 0; f < sizeof src / sizeof src[0]; f++) {
+        pf_surface ps = { src[f], NULL, 0, NULL, 0 };
+        ism_tape *t = pf_compile(&ps);
+        ism_eval_ws *ws = ism_eval_ws_new(t);
+        cr_assert_not_null(ws);
+        double lo[NS][3], hi[NS][3], lanes[NS][3];
+        ism_newton_opts o[NS];
+        for (int i = 0; i < NS; i++) {
+            for (int k = 0; k < 3; k++) {
+                lo[i][k] = start[i][k] - 1.0;
+                hi[i][k] = start[i][k] + 1.0;
+            }
+            o[i] = (ism_newton_opts){ ISM_SING_PINV_REL, 0.5, 1e-10, 10, lo[i], hi[i], true };
+        }
+        memcpy(lanes, start, sizeof lanes);
+        ism_newton_result lr[NS];
+        ism_sing_newton_lanes(t, ws, lanes, o, lr, NS, NULL);
+        for (int i = 0; i < NS; i++) {
+            double p[3] = { start[i][0], start[i][1], start[i][2] }, g0[3], h0[6];
+            ism_newton_result r = ism_sing_newton(t, ws, p, &o[i], NULL);
+            ism_eval_hessian(t, ws, start[i][0], start[i][1], start[i][2], g0, h0);
+            bool finite = true;
+            for (int k = 0; k < 6; k++)
+                finite = finite && isfinite(h0[k]) && (k > 2 || isfinite(g0[k]));
+            non_finite += !finite;
+            cr_expect(!memcmp(h0, r.start_hess, sizeof h0)
+                          && !memcmp(h0, lr[i].start_hess, sizeof h0),
+                      "%s start %d: the Hessian at the start", src[f], i);
+            cr_expect(!memcmp(p, lanes[i], sizeof p) && r.converged == lr[i].converged
+                          && r.iterations == lr[i].iterations,
+                      "%s start %d: %d/%d iterations, converged %d/%d", src[f], i, r.iterations,
+                      lr[i].iterations, r.converged, lr[i].converged);
+        }
+        ism_eval_ws_free(ws);
+        ism_tape_free(t);
+    }
+    cr_expect_gt(non_finite, 3, "%d starts with a non-finite Hessian or gradient", non_finite);
 }
 
 /* Matrix i of the pinv_lanes set (see the top). */
