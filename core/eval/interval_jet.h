@@ -86,6 +86,12 @@ size_t ism_eval_interval_grad_kept(const ism_tape *t, ism_ivjet_ws *ws,
  * dual_classify.c PRE_MODELS_MIN, search.c pre_gradients) rest on these figures. */
 #define ISM_IVGRAD_BATCH 8
 
+/* The boxes of one group of a batched pass (one AVX2 vector of doubles; a batch is
+ * ISM_IVGRAD_BATCH / ISM_IVGRAD_GROUP groups): ism_eval_interval_jet_lanes takes the values and
+ * first partials from the last pass's records only when every box's lies in one group, so a
+ * caller batching jets from records takes them a group at a time (search.c box_jets). */
+#define ISM_IVGRAD_GROUP 4
+
 /* ism_eval_interval_grad_kept over box[0..n) (n <= ISM_IVGRAD_BATCH) at once, bit for bit:
  * out[k] the enclosure over box[k], each box's record kept in ws so that a following
  * ism_eval_interval_jet of t over any of them (unforced, once each) computes only the

@@ -18,7 +18,7 @@ typedef ism_interval ism_kept_vd[4];
 /* A batch's lanes are walked in groups of ISM_IVG_VL (one AVX2 vector of doubles). A
  * register of the batched pass, and an instruction's record, is ISM_IVG_GROUPS groups of
  * 8 vectors: the lower and the upper bounds of the value and of each first partial. */
-#define ISM_IVG_VL 4
+#define ISM_IVG_VL ISM_IVGRAD_GROUP /* interval_jet.h: callers group jets by it */
 #define ISM_IVG_GROUPS (ISM_IVGRAD_BATCH / ISM_IVG_VL)
 #define ISM_IVG_REG (ISM_IVG_GROUPS * 8 * ISM_IVG_VL) /* doubles a register or record holds */
 /* ISM_IVG_GROUPS counts whole groups: a batch of 10 would walk a third group past a

@@ -203,6 +203,13 @@ typedef struct ism_locus {
                                    of those classify then read (none dropped before): tests
                                    see the batch ran and wasted no lane; not in the JSON stats */
     uint64_t grads_batch_read;
+    uint64_t centres_batched;   /* cells whose gradient at the centre the search gave to a
+                                   batch (search.c: queued by round_take on tapes without
+                                   kinks, only where it is read; with kinks pre_gradients
+                                   takes every box's with it), and how many of those
+                                   smooth_tests then read: tests see no centre is batched
+                                   unread or left out of its batch; not in the JSON stats */
+    uint64_t centres_batch_read;
     double time_ms;
     double hessian_scale;       /* the largest Hessian norm sampled over the box (set by the
                                    search; 0 = unknown): the absolute scale below which a

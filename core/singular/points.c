@@ -561,6 +561,8 @@ static bool search_below(ctx *x, const ism_lbox *b, const double lo[3], const do
     x->out->centre_dropped += sub.centre_dropped;
     x->out->grads_batched += sub.grads_batched;
     x->out->grads_batch_read += sub.grads_batch_read;
+    x->out->centres_batched += sub.centres_batched;
+    x->out->centres_batch_read += sub.centres_batch_read;
     for (size_t j = 0; ok && j < sub.nboxes; j++)
         if ((sub.boxes[j].flags & ISM_LBOX_UNIQUE)
             || ((sub.boxes[j].flags & ISM_LBOX_PROJECTED) && sub.boxes[j].rank >= min_rank))

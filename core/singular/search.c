@@ -140,6 +140,8 @@ typedef struct worker {
     uint64_t centre_dropped; /* cells the centre test (children_quad) dropped */
     uint64_t grads_batched;  /* cells whose gradients pre_gradients took */
     uint64_t grads_batch_read; /* ... and classify read */
+    uint64_t centres_batched;  /* cells whose centre's gradient was given to a batch */
+    uint64_t centres_batch_read; /* ... and smooth_tests read from it */
     /* a task's parents between screening and finish (expand_task): SEARCH_CELLS_PER_TASK
      * expansions of 3,352 bytes (8 pre_grad with a full ism_ivjet each), 52 KiB a worker */
     struct expansion *ex;
@@ -318,9 +320,10 @@ static void centre_at(const search *s, worker *w, const ism_interval x[3], ism_d
     centre_of(x, m->c);
     _Pragma("GCC unroll 3") for (int k = 0; k < 3; k++)
         cx[k] = iv(m->c[k], m->c[k]);
-    if (pre) /* taken beforehand (pre_gradients), counted now */
+    if (pre) { /* taken beforehand (pre_gradients, centres_take), counted now */
         m->at = *pre;
-    else
+        w->centres_batch_read++;
+    } else
         ism_eval_interval_grad(s->t, w->jw, cx, NULL, NULL, &m->at);
     w->evals_interval++;
 }
@@ -612,8 +615,11 @@ static int screen(worker *w, const scell *c, const ism_interval x[3], ism_interv
  * reads them first, without listing its kink bytes (ism_ivjet_lane_kinks: only the forced
  * passes read them). The batch is the last batched pass (batch_kinked finishes a parent's
  * children right after it), so its lane holds the box and lane_kinks would have answered
- * pre->nk: the same verdict and counts. Barth at E 0.0259: 12,840 lane_kinks calls, 1.55M
- * instructions. False when not decided so (the caller goes on as before). */
+ * pre->nk: the same verdict and counts. top_pieces would prefer a scalar pass's registers
+ * over the same box, which lane_kinks never reads; none can match here: a child's box gets no
+ * scalar gradient pass before its classify (a scalar pass of another box does not match, and
+ * then the lane answers). Barth at E 0.0259: 12,840 lane_kinks calls, 1.55M instructions.
+ * False when not decided so (the caller goes on as before). */
 static bool top_kink_verdict(const search *s, worker *w, const ism_interval x[3],
                              const pre_grad *pre, int *v)
 {
@@ -1027,6 +1033,7 @@ static bool pre_gradients(const search *s, worker *w, const pre_slot *sl, size_t
         p->nk = nk[k];
     }
     w->grads_batched += n;
+    w->centres_batched += centres ? n : 0;
     return true;
 }
 
@@ -1167,9 +1174,9 @@ static void batch_kinked(const search *s, worker *w, expansion *e)
         pre_gradients(s, w, sl, n, false);
 }
 
-/* Boxes of one group of a batched gradient pass (interval_jet.h: ISM_IVGRAD_BATCH boxes run
- * as two groups of 4): the jets from a pass's records take the boxes of one group at a time. */
-#define GRAD_GROUP (ISM_IVGRAD_BATCH / 2)
+/* Boxes of one group of a batched gradient pass (interval_jet.h): the jets from a pass's
+ * records take the boxes of one group at a time. */
+#define GRAD_GROUP ISM_IVGRAD_GROUP
 
 /* After pre_gradients over boxes alone (tapes without kinks: round_take), sl[0..ns) one group
  * of its boxes, no other batched pass since: the jets (jets_into, from the pass's records)
@@ -1236,6 +1243,7 @@ static void round_take(const search *s, worker *w, smooth_rounds *r)
     for (size_t g = 0; g < groups; g++)
         for (size_t k = 0; k < kept[g]; k++) {
             r->centre[r->ncentre++] = r->box[g * GRAD_GROUP + k];
+            w->centres_batched++; /* given to the queue: read only once centres_take ran */
             if (r->ncentre == ISM_IVGRAD_BATCH) {
                 centres_take(s, w, r->centre, r->ncentre);
                 r->ncentre = 0;
@@ -1489,6 +1497,8 @@ bool ism_sing_search_batched(const ism_tape *f, const ism_locus_options *o, bool
         out->centre_dropped += s.workers[i].centre_dropped;
         out->grads_batched += s.workers[i].grads_batched;
         out->grads_batch_read += s.workers[i].grads_batch_read;
+        out->centres_batched += s.workers[i].centres_batched;
+        out->centres_batch_read += s.workers[i].centres_batch_read;
     }
     free(boxes.p);
     free_workers(&s);
