@@ -16,6 +16,7 @@
 #include "core/octree/face_flat.h"
 #include "core/octree/root_table.h"
 #include "core/octree/singular.h"
+#include "core/octree/tile_corners.h"
 #include "core/util/grow.h"
 #include "core/util/vec3.h"
 
@@ -185,34 +186,6 @@ static bool push_bpoint(ism_cell_ctx *cx, const int32_t ip[3], const ism_lattice
     return true;
 }
 
-/* Tile t's four corners, counter-clockwise in (u, v) from (u0, v0): (u0, v0), (u1, v0),
- * (u1, v1), (u0, v1). */
-static inline void tile_corners(const ism_tile *t, int32_t q[4][3])
-{
-    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
-    int32_t cu[4] = {t->u0, t->u1, t->u1, t->u0}, cv[4] = {t->v0, t->v0, t->v1, t->v1};
-    for (int k = 0; k < 4; k++) {
-        q[k][t->axis] = t->plane;
-        q[k][u] = cu[k];
-        q[k][v] = cv[k];
-    }
-}
-
-/* ... and their world positions, as ism_grid_point gives them: the tile's five coordinates
- * (its plane, u0, u1, v0, v1) each found once, not twelve times. */
-static inline void tile_corner_points(const ism_grid *g, const ism_tile *t, double p[4][3])
-{
-    int u = ism_axis_next(t->axis), v = ism_axis_prev(t->axis);
-    double w = ism_grid_coord(g, t->axis, t->plane);
-    double pu[2] = {ism_grid_coord(g, u, t->u0), ism_grid_coord(g, u, t->u1)};
-    double pv[2] = {ism_grid_coord(g, v, t->v0), ism_grid_coord(g, v, t->v1)};
-    for (int k = 0; k < 4; k++) {
-        p[k][t->axis] = w;
-        p[k][u] = pu[k == 1 || k == 2];
-        p[k][v] = pv[k >= 2];
-    }
-}
-
 /* A corner of the tile as the walk needs it: its boundary point and its successors on its
  * lattice lines (copied: its memo entry may be taken by a later lookup). */
 typedef struct tile_corner {
@@ -299,8 +272,8 @@ static bool tile_boundary(ism_cell_ctx *cx, const ism_tile *t, bool *quiet)
     tile_corner c[4];
     int32_t q[4][3];
     double p[4][3];
-    tile_corners(t, q);
-    tile_corner_points(&cx->tree->grid, t, p);
+    ism_tile_corners(t, q);
+    ism_tile_corner_points(&cx->tree->grid, t, p);
     for (int k = 0; k < 4; k++) {
         const ism_lattice_entry *e = lattice_entry(cx, q[k]);
         /* sides 0 and 1 run up u and v, 2 and 3 down */
@@ -1215,7 +1188,7 @@ void ism_tile_prefetch(ism_cell_ctx *cx, const ism_node_tile *nt, bool corners)
     if (!corners)
         return;
     int32_t q[4][3];
-    tile_corners(&nt->t, q);
+    ism_tile_corners(&nt->t, q);
     for (int c = 0; c < 4; c++)
         ism_lattice_prefetch(cx, q[c]);
 }
