@@ -6,6 +6,7 @@
 #ifndef ISM_EDGE_ROOTS_H
 #define ISM_EDGE_ROOTS_H
 
+#include <assert.h>
 #include <math.h>
 #include "core/octree/sampler.h"
 #include "core/util/vec3.h"
@@ -116,7 +117,11 @@ bool ism_segment_rootless_normed(const ism_root_params *prm, const double a[3],
  * vanishing or undefined one agrees -2, below any gradient_test, tolerances.c's -1 .. 1),
  * so their terms along the other axes are ±0, which leave a nonzero sum as it is, and a zero
  * slope fails the test whatever its sign. The face walk asks it of every segment it meets
- * (Klein's bottle at E 3.27e-3: 740K times). */
+ * (Klein's bottle at E 3.27e-3: 740K times). Preconditions of that argument: na, nb are
+ * |ga|, |gb| (ism_norm3: an inf or NaN component makes the norm inf or NaN, so a finite norm
+ * means finite components), and prm->gradient_test >= -1 (above ism_one_sheet's -2), asserted
+ * where the pocket test is reached: an ism_root_params built from option structs bypasses
+ * tolerances.c's bounds. */
 static inline bool ism_lattice_segment_rootless(const ism_root_params *prm, int axis,
                                                 const double a[3], const double b[3],
                                                 double fa, double fb, const double ga[3],
@@ -126,6 +131,7 @@ static inline bool ism_lattice_segment_rootless(const ism_root_params *prm, int 
         return true;
     if (!ism_one_sheet(prm, fa, fb, ga, gb, na, nb))
         return false;
+    assert(prm->gradient_test > -2); /* else an inf gradient could reach the slopes */
     double d = b[axis] - a[axis];
     return !ism_pocket_by_slopes(fa, fb, ga[axis] * d, gb[axis] * d, prm->crease);
 }

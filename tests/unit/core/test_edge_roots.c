@@ -12,9 +12,11 @@
  * example surface, with more segments than lanes, and f changing sign across each root
  * (t ± 1e-9, measured). Segments whose first secant lands exactly on the root (f = 0 there:
  * a lane freed after one step) mixed with ordinary ones: the same, and those roots the
- * closed form's t. */
+ * closed form's t. The inline rootless test of a lattice segment against the general one
+ * (segments of 0 to 5 steps, up and down), and its assert on gradient_test's precondition. */
 #include <criterion/criterion.h>
 #include <math.h>
+#include <signal.h>
 #include <string.h>
 #include "core/octree/edge_roots.h"
 #include "poly_fixture.h"
@@ -255,18 +257,18 @@ Test(edge_roots, lanes_free_a_lane_on_an_exact_zero)
  * NaN now and then, gradients with components 0, −0, ±inf or NaN now and then, and many
  * nearly along the segment or across it (slopes of 0 or either sign), with crease on and
  * off and gradient_test across its range (-1 .. 1, tolerances.c). The draws must reach the
- * pocket test and see it both ways, or the sweep proves nothing about the slopes. */
-static uint64_t rl_state = 0x9e3779b97f4a7c15ull;
-
-static double rl_unit(void) /* uniform in [0, 1) */
+ * pocket test and see it both ways, or the sweep proves nothing about the slopes. Segments
+ * are 0 to 5 steps long, a quarter of them drawn downward (b below a: d < 0, as the walk's
+ * sides 2 and 3 and a single-point boundary's bp[0] → bp[0] give them). */
+static double rl_unit(uint64_t *s) /* uniform in [0, 1); *s the xorshift state */
 {
-    rl_state ^= rl_state << 13, rl_state ^= rl_state >> 7, rl_state ^= rl_state << 17;
-    return (double)(rl_state >> 11) * 0x1p-53;
+    *s ^= *s << 13, *s ^= *s >> 7, *s ^= *s << 17;
+    return (double)(*s >> 11) * 0x1p-53;
 }
 
-static double rl_value(void) /* mostly ordinary, now and then 0, −0, ±inf or NaN */
+static double rl_value(uint64_t *s) /* mostly ordinary, now and then 0, −0, ±inf or NaN */
 {
-    double r = rl_unit();
+    double r = rl_unit(s);
     if (r < 0.04)
         return 0.0;
     if (r < 0.06)
@@ -277,7 +279,7 @@ static double rl_value(void) /* mostly ordinary, now and then 0, −0, ±inf or 
         return -INFINITY;
     if (r < 0.09)
         return NAN;
-    return (rl_unit() - 0.5) * 4;
+    return (rl_unit(s) - 0.5) * 4;
 }
 
 Test(edge_roots, lattice_rootless_is_the_general_test)
@@ -286,24 +288,28 @@ Test(edge_roots, lattice_rootless_is_the_general_test)
                                 {PF_OFF_X, PF_OFF_Y, PF_OFF_Z},
                                 {PF_IRR_X / 64, PF_IRR_Y / 64, PF_IRR_Z / 64}};
     const double tests[] = {-1, 0, 0.5, 0.9, 1};
-    size_t pockets[2] = {0, 0}, cases = 0;
+    size_t pockets[2] = {0, 0}, cases = 0, lengths[2] = {0, 0}; /* zero, downward */
+    uint64_t s = 0x9e3779b97f4a7c15ull;
     for (int pl = 0; pl < 3; pl++)
         for (int n = 0; n < 200000; n++) {
             int axis = n % 3, i[3];
             double a[3], b[3], ga[3], gb[3];
             for (int k = 0; k < 3; k++) {
-                i[k] = (int)(rl_unit() * 128) - 64;
+                i[k] = (int)(rl_unit(&s) * 128) - 64;
                 a[k] = -1.0 + shift[pl][k] + (1.0 / 64) * (double)i[k];
                 b[k] = a[k];
             }
-            b[axis] = -1.0 + shift[pl][axis] + (1.0 / 64) * (double)(i[axis] + 1 + n % 5);
+            int len = (int)(rl_unit(&s) * 6) * (rl_unit(&s) < 0.25 ? -1 : 1);
+            lengths[0] += len == 0, lengths[1] += len < 0;
+            b[axis] = -1.0 + shift[pl][axis] + (1.0 / 64) * (double)(i[axis] + len);
             for (int k = 0; k < 3; k++) {
-                ga[k] = rl_value();
-                gb[k] = rl_unit() < 0.5 ? ga[k] + 0.1 * rl_value() : rl_value();
+                ga[k] = rl_value(&s);
+                gb[k] = rl_unit(&s) < 0.5 ? ga[k] + 0.1 * rl_value(&s) : rl_value(&s);
             }
             if (n % 4 == 1) /* across the segment: slopes ±0 */
                 ga[axis] = n % 8 == 1 ? 0.0 : -0.0, gb[axis] = -ga[axis];
-            double fa = rl_value(), fb = rl_unit() < 0.7 ? fa * (0.5 + rl_unit()) : rl_value();
+            double fa = rl_value(&s);
+            double fb = rl_unit(&s) < 0.7 ? fa * (0.5 + rl_unit(&s)) : rl_value(&s);
             ism_root_params prm = {tests[n % 5], 1e-9, 25, n % 2 == 0};
             double na = ism_norm3(ga), nb = ism_norm3(gb);
             bool want = ism_segment_rootless_normed(&prm, a, b, fa, fb, ga, gb, na, nb);
@@ -318,8 +324,22 @@ Test(edge_roots, lattice_rootless_is_the_general_test)
             }
             cases++;
         }
+    cr_expect_gt(lengths[0], cases / 20, "%zu of %zu of length 0", lengths[0], cases);
+    cr_expect_gt(lengths[1], cases / 10, "%zu of %zu downward", lengths[1], cases);
     cr_expect_gt(pockets[0], cases / 100, "%zu of %zu reached the pocket test and passed",
                  pockets[0], cases);
     cr_expect_gt(pockets[1], cases / 100, "%zu of %zu reached the pocket test and failed",
                  pockets[1], cases);
+}
+
+/* ism_lattice_segment_rootless's precondition gradient_test > -2 (ism_one_sheet's sentinel
+ * for a vanishing or undefined gradient): with -3 an inf gradient passes ism_one_sheet and
+ * would reach the slopes, where the general test's dot product gives NaN (no pocket) and the
+ * inline one a finite slope; the assert stops it there. */
+Test(edge_roots, lattice_rootless_asserts_gradient_test_above_the_sentinel, .signal = SIGABRT)
+{
+    ism_root_params prm = {-3, 1e-9, 25, false};
+    const double a[3] = {0, 0, 0}, b[3] = {0.25, 0, 0};
+    const double ga[3] = {INFINITY, 0, 1}, gb[3] = {1, 0, 0};
+    ism_lattice_segment_rootless(&prm, 0, a, b, 1.0, 0.5, ga, gb, 1.0, 1.0);
 }
